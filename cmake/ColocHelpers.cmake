@@ -1,0 +1,37 @@
+# Helpers shared by the folders.
+
+# Environment every MPI launch in CTest gets: mpirun as root, more ranks than cores.
+set(COLOC_MPI_ENV OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+    OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl_vader_single_copy_mechanism=none)
+
+# coloc_add_library(name SOURCES ... DEPS ...): a folder's library with its public include/.
+function(coloc_add_library name)
+  cmake_parse_arguments(A "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(coloc_${name} ${A_SOURCES})
+  add_library(coloc::${name} ALIAS coloc_${name})
+  target_include_directories(coloc_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(coloc_${name} PUBLIC ${A_DEPS})
+endfunction()
+
+# coloc_add_mpi_test(NAME exe RANKS 1 2 4 LABELS ... [ARGS ...] [TIMEOUT s]):
+# registers `exe` once per rank count, launched through mpiexec.
+function(coloc_add_mpi_test name)
+  cmake_parse_arguments(A "" "TIMEOUT;TARGET" "RANKS;LABELS;ARGS" ${ARGN})
+  if(NOT A_TIMEOUT)
+    set(A_TIMEOUT 300)
+  endif()
+  if(NOT A_TARGET)
+    set(A_TARGET ${name})
+  endif()
+  foreach(np ${A_RANKS})
+    set(procs ${np})
+    if(procs GREATER 2)
+      set(procs 2)
+    endif()
+    add_test(NAME ${name}_np${np}
+             COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} --bind-to none
+                     ${MPIEXEC_PREFLAGS} $<TARGET_FILE:${A_TARGET}> ${MPIEXEC_POSTFLAGS} ${A_ARGS})
+    set_tests_properties(${name}_np${np} PROPERTIES ENVIRONMENT "${COLOC_MPI_ENV}"
+                         PROCESSORS ${procs} TIMEOUT ${A_TIMEOUT} LABELS "${A_LABELS}")
+  endforeach()
+endfunction()

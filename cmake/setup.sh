@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# cmake/setup.sh [BUILD_DIR] [extra cmake args...]
+# Installs the Debian packages coloc needs (only those missing), then configures and builds.
+# Idempotent: with everything installed and built it takes a few seconds.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${1:-$root/build}
+shift || true
+
+packages=(cmake ninja-build g++ pkg-config openmpi-bin libopenmpi-dev libhypre-dev
+          libhdf5-openmpi-dev hdf5-tools libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
+          nlohmann-json3-dev libcli11-dev python3-matplotlib python3-numpy python3-h5py)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "coloc setup: installing ${missing[*]}"
+  sudo=""
+  [[ $(id -u) -ne 0 ]] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# mpirun as root and with more ranks than cores (containers, CI).
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+
+if [[ ! -f $build/build.ninja ]]; then
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+        -DPython3_EXECUTABLE=/usr/bin/python3 "$@" >/dev/null
+fi
+cmake --build "$build" -j "$(nproc)"

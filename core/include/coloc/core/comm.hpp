@@ -1,0 +1,130 @@
+// coloc/core/comm.hpp — all MPI of the project goes through this small module.
+//
+// Comm wraps a communicator (world, or a Cartesian one made by partition/) with the few
+// collectives the solvers need, typed non-blocking point-to-point, and the collective error
+// path raiseIfAny(). Nothing else in coloc includes <mpi.h> except partition's halo plan and
+// hypre glue, which take the raw handle from Comm::raw().
+#pragma once
+
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace coloc {
+
+/// RAII for MPI_Init/MPI_Finalize (and HYPRE_Init/Finalize via the fv library's own guard).
+class MpiSession {
+ public:
+  MpiSession(int* argc, char*** argv);
+  ~MpiSession();
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+};
+
+template <class T>
+MPI_Datatype mpiType();
+template <>
+inline MPI_Datatype mpiType<double>() { return MPI_DOUBLE; }
+template <>
+inline MPI_Datatype mpiType<float>() { return MPI_FLOAT; }
+template <>
+inline MPI_Datatype mpiType<int>() { return MPI_INT; }
+template <>
+inline MPI_Datatype mpiType<long long>() { return MPI_LONG_LONG; }
+template <>
+inline MPI_Datatype mpiType<unsigned long long>() { return MPI_UNSIGNED_LONG_LONG; }
+template <>
+inline MPI_Datatype mpiType<long>() { return MPI_LONG; }
+template <>
+inline MPI_Datatype mpiType<unsigned long>() { return MPI_UNSIGNED_LONG; }
+template <>
+inline MPI_Datatype mpiType<char>() { return MPI_CHAR; }
+template <>
+inline MPI_Datatype mpiType<std::uint8_t>() { return MPI_UINT8_T; }
+
+struct MinMaxAvg {
+  double min = 0, max = 0, avg = 0, sum = 0;
+};
+
+class Comm {
+ public:
+  Comm() : comm_(MPI_COMM_WORLD) {}
+  explicit Comm(MPI_Comm c) : comm_(c) {}
+  static Comm world() { return Comm(MPI_COMM_WORLD); }
+
+  int rank() const;
+  int size() const;
+  MPI_Comm raw() const { return comm_; }
+  bool isRoot() const { return rank() == 0; }
+
+  void barrier() const;
+  double wtime() const { return MPI_Wtime(); }
+
+  template <class T>
+  T sum(T v) const { return allreduce(v, MPI_SUM); }
+  template <class T>
+  T max(T v) const { return allreduce(v, MPI_MAX); }
+  template <class T>
+  T min(T v) const { return allreduce(v, MPI_MIN); }
+  template <class T>
+  void sumInPlace(std::span<T> v) const {
+    MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), mpiType<T>(), MPI_SUM, comm_);
+  }
+  template <class T>
+  void maxInPlace(std::span<T> v) const {
+    MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), mpiType<T>(), MPI_MAX, comm_);
+  }
+  MinMaxAvg minMaxAvg(double v) const;
+  template <class T>
+  std::vector<T> allgather(T v) const {
+    std::vector<T> out(static_cast<std::size_t>(size()));
+    MPI_Allgather(&v, 1, mpiType<T>(), out.data(), 1, mpiType<T>(), comm_);
+    return out;
+  }
+
+  /// Broadcast a string from `root` (used for the case file text: one reader, same text everywhere).
+  std::string broadcast(std::string s, int root = 0) const;
+  template <class T>
+  void broadcast(std::span<T> v, int root = 0) const {
+    MPI_Bcast(v.data(), static_cast<int>(v.size()), mpiType<T>(), root, comm_);
+  }
+
+  /// Collective error path: every rank calls it; if any rank passes a non-empty message, every
+  /// rank throws coloc::Error with the message of the lowest failing rank (prefixed by its rank).
+  void raiseIfAny(const std::string& localError) const;
+
+  template <class T>
+  MPI_Request isend(std::span<const T> buf, int dest, int tag) const {
+    MPI_Request r;
+    MPI_Isend(buf.data(), static_cast<int>(buf.size()), mpiType<T>(), dest, tag, comm_, &r);
+    return r;
+  }
+  template <class T>
+  MPI_Request irecv(std::span<T> buf, int src, int tag) const {
+    MPI_Request r;
+    MPI_Irecv(buf.data(), static_cast<int>(buf.size()), mpiType<T>(), src, tag, comm_, &r);
+    return r;
+  }
+  static void waitAll(std::span<MPI_Request> reqs);
+
+  /// Exchange counts with a peer (returns the count received); used to size variable messages.
+  int exchangeCount(int sendCount, int dest, int src, int tag) const;
+
+ private:
+  template <class T>
+  T allreduce(T v, MPI_Op op) const {
+    T out{};
+    MPI_Allreduce(&v, &out, 1, mpiType<T>(), op, comm_);
+    return out;
+  }
+  MPI_Comm comm_;
+};
+
+/// Ends every rank at once; for failures that cannot be made collective (last resort).
+[[noreturn]] void abortAll(const std::string& message, int code = 3);
+
+}  // namespace coloc

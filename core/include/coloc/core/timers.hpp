@@ -1,0 +1,133 @@
+// coloc/core/timers.hpp — one table of phase names; wall and thread-CPU (busy) time per phase,
+// reduced to min/avg/max over ranks for the report. Exchange accounting by the three kinds of
+// SPEC section 4 lives here too, so every folder books its messages in one place.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+#include "coloc/core/comm.hpp"
+#include "coloc/core/config.hpp"
+
+namespace coloc {
+
+/// What a phase counts towards in `fractions.*`.
+enum class Category : std::uint8_t { Setup, Fluid, Particles, Coupling, InterPhysics, Output };
+
+enum class Phase : std::uint8_t {
+  Setup,
+  // fv: one fluid step
+  FluidMomentum,         // convection, diffusion, body force, drag: the predictor u*
+  FluidBoundary,         // boundary conditions on the fields
+  FluidHalo,             // intra-physics halo exchanges of the fluid
+  FluidPressureAssemble, // matrix and right-hand side of the pressure equation
+  FluidPressureSolve,    // hypre PCG+PFMG
+  FluidProject,          // velocity correction
+  // dem: one sub-step
+  DemNeighbor,   // binning, sorting, Verlet lists
+  DemForce,      // contact and wall forces
+  DemIntegrate,  // velocity Verlet
+  DemGhost,      // ghost update (intra-physics)
+  DemMigrate,    // migration at rebuilds (intra-physics)
+  // coupling arithmetic (not exchange)
+  CouplingDeposit,      // kernel weights: particles -> eps, K, K u_p
+  CouplingInterpolate,  // kernel weights: u, eps, grad p -> particles
+  CouplingDrag,         // drag laws
+  // inter-physics exchange (data movement between the two physics)
+  ExchangeLocal,   // inside a rank: gather/scatter between fluid and particle structures
+  ExchangeRemote,  // across ranks: reverse halo sum of deposited fields, independent-mode transfers
+  Output,
+  Checkpoint,
+  Count
+};
+
+struct PhaseInfo {
+  std::string_view name;
+  Category category;
+};
+
+inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> kPhases = {{
+    {"setup", Category::Setup},
+    {"fluid_momentum", Category::Fluid},
+    {"fluid_boundary", Category::Fluid},
+    {"fluid_halo", Category::Fluid},
+    {"fluid_pressure_assemble", Category::Fluid},
+    {"fluid_pressure_solve", Category::Fluid},
+    {"fluid_project", Category::Fluid},
+    {"dem_neighbor", Category::Particles},
+    {"dem_force", Category::Particles},
+    {"dem_integrate", Category::Particles},
+    {"dem_ghost", Category::Particles},
+    {"dem_migrate", Category::Particles},
+    {"coupling_deposit", Category::Coupling},
+    {"coupling_interpolate", Category::Coupling},
+    {"coupling_drag", Category::Coupling},
+    {"exchange_local", Category::InterPhysics},
+    {"exchange_remote", Category::InterPhysics},
+    {"output", Category::Output},
+    {"checkpoint", Category::Output},
+}};
+
+inline constexpr std::string_view phaseName(Phase p) {
+  return kPhases[static_cast<std::size_t>(p)].name;
+}
+
+/// The three kinds of exchange of SPEC section 4.
+enum class Exchange : std::uint8_t { IntraPhysics, InterPhysicsLocal, InterPhysicsRemote, Count };
+inline constexpr std::array<std::string_view, 3> kExchangeNames = {
+    "intra_physics", "inter_physics_local", "inter_physics_remote"};
+
+double threadCpuSeconds();
+
+class Timers {
+ public:
+  void start(Phase p);
+  void stop(Phase p);
+  /// Seconds and calls of a phase on this rank.
+  double seconds(Phase p) const { return slot(p).wall; }
+  double busySeconds(Phase p) const { return slot(p).cpu; }
+  long long calls(Phase p) const { return slot(p).calls; }
+  /// Book one exchange: bytes and messages sent by this rank, and its time.
+  void book(Exchange kind, long long bytes, long long messages, double seconds = 0.0);
+  long long bytes(Exchange kind) const { return ledger_[idx(kind)].bytes; }
+  long long messages(Exchange kind) const { return ledger_[idx(kind)].messages; }
+  void reset();
+
+  /// Collective: timers.<phase>.{min,avg,max,calls,busy_max,busy_avg},
+  /// exchange.<kind>.{bytes,messages,time_s}, fractions.*, load_imbalance.
+  Json report(const Comm& comm, double stepWallSeconds) const;
+
+ private:
+  struct Slot {
+    double wall = 0, cpu = 0, wall0 = 0, cpu0 = 0;
+    long long calls = 0;
+  };
+  struct Ledger {
+    long long bytes = 0, messages = 0;
+    double seconds = 0;
+  };
+  static std::size_t idx(Phase p) { return static_cast<std::size_t>(p); }
+  static std::size_t idx(Exchange e) { return static_cast<std::size_t>(e); }
+  const Slot& slot(Phase p) const { return slots_[idx(p)]; }
+  std::array<Slot, static_cast<std::size_t>(Phase::Count)> slots_{};
+  std::array<Ledger, static_cast<std::size_t>(Exchange::Count)> ledger_{};
+};
+
+/// RAII phase timer: `ScopedPhase t(timers, Phase::DemForce);`
+class ScopedPhase {
+ public:
+  ScopedPhase(Timers& t, Phase p) : t_(t), p_(p) { t_.start(p_); }
+  ~ScopedPhase() { t_.stop(p_); }
+  ScopedPhase(const ScopedPhase&) = delete;
+  ScopedPhase& operator=(const ScopedPhase&) = delete;
+
+ private:
+  Timers& t_;
+  Phase p_;
+};
+
+/// Peak resident set size of this process in bytes (getrusage).
+long long peakRssBytes();
+
+}  // namespace coloc

@@ -1,0 +1,84 @@
+#include "coloc/core/comm.hpp"
+
+#include <cstdio>
+
+#include "coloc/core/error.hpp"
+
+namespace coloc {
+
+MpiSession::MpiSession(int* argc, char*** argv) {
+  int initialised = 0;
+  MPI_Initialized(&initialised);
+  if (!initialised) MPI_Init(argc, argv);
+}
+
+MpiSession::~MpiSession() {
+  int finalised = 0;
+  MPI_Finalized(&finalised);
+  if (!finalised) MPI_Finalize();
+}
+
+int Comm::rank() const {
+  int r = 0;
+  MPI_Comm_rank(comm_, &r);
+  return r;
+}
+
+int Comm::size() const {
+  int s = 1;
+  MPI_Comm_size(comm_, &s);
+  return s;
+}
+
+void Comm::barrier() const { MPI_Barrier(comm_); }
+
+MinMaxAvg Comm::minMaxAvg(double v) const {
+  double in[2] = {v, -v}, out[2];
+  MPI_Allreduce(in, out, 2, MPI_DOUBLE, MPI_MAX, comm_);
+  MinMaxAvg r;
+  r.max = out[0];
+  r.min = -out[1];
+  r.sum = sum(v);
+  r.avg = r.sum / size();
+  return r;
+}
+
+std::string Comm::broadcast(std::string s, int root) const {
+  long long n = static_cast<long long>(s.size());
+  MPI_Bcast(&n, 1, MPI_LONG_LONG, root, comm_);
+  s.resize(static_cast<std::size_t>(n));
+  if (n > 0) MPI_Bcast(s.data(), static_cast<int>(n), MPI_CHAR, root, comm_);
+  return s;
+}
+
+void Comm::raiseIfAny(const std::string& localError) const {
+  const int me = rank();
+  const int failing = localError.empty() ? size() : me;
+  const int first = min(failing);
+  if (first == size()) return;
+  std::string msg = broadcast(first == me ? localError : std::string(), first);
+  if (size() > 1) msg = "rank " + std::to_string(first) + ": " + msg;
+  throw Error(msg);
+}
+
+void Comm::waitAll(std::span<MPI_Request> reqs) {
+  MPI_Waitall(static_cast<int>(reqs.size()), reqs.data(), MPI_STATUSES_IGNORE);
+}
+
+int Comm::exchangeCount(int sendCount, int dest, int src, int tag) const {
+  int recvCount = 0;
+  MPI_Sendrecv(&sendCount, 1, MPI_INT, dest, tag, &recvCount, 1, MPI_INT, src, tag, comm_,
+               MPI_STATUS_IGNORE);
+  return src == MPI_PROC_NULL ? 0 : recvCount;
+}
+
+void abortAll(const std::string& message, int code) {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  std::fprintf(stderr, "coloc: fatal (rank %d): %s\n", rank, message.c_str());
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, code);
+  std::abort();
+}
+
+}  // namespace coloc

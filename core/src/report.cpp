@@ -1,0 +1,74 @@
+#include "coloc/core/report.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+namespace coloc {
+
+Report::Report(const std::string& caseSource, const Json& resolvedConfig) {
+  json_["coloc_version"] = kVersion;
+  json_["case"] = caseSource;
+  json_["config"] = resolvedConfig;
+}
+
+void Report::set(const std::string& path, Json value) {
+  Json* node = &json_;
+  std::size_t start = 0;
+  while (true) {
+    const auto dot = path.find('.', start);
+    const std::string key = path.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+    if (dot == std::string::npos) {
+      (*node)[key] = std::move(value);
+      return;
+    }
+    node = &(*node)[key];
+    if (!node->is_object()) *node = Json::object();
+    start = dot + 1;
+  }
+}
+
+void Report::merge(const Json& object) {
+  for (auto& [k, v] : object.items()) {
+    if (json_.contains(k) && json_[k].is_object() && v.is_object()) {
+      for (auto& [k2, v2] : v.items()) json_[k][k2] = v2;
+    } else {
+      json_[k] = v;
+    }
+  }
+}
+
+void Report::addMemory(const Comm& comm) {
+  const long long rss = peakRssBytes();
+  set("memory.peak_rss_bytes_max", comm.max(rss));
+  set("memory.peak_rss_bytes_sum", comm.sum(rss));
+}
+
+void makeDirectories(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error("cannot create directory '" + dir + "': " + ec.message());
+}
+
+std::string Report::write(const Comm& comm, const std::string& dir) const {
+  const std::string path = (std::filesystem::path(dir) / "report.json").string();
+  std::string err;
+  if (comm.isRoot()) {
+    try {
+      makeDirectories(dir);
+      const std::string tmp = path + ".tmp";
+      {
+        std::ofstream out(tmp);
+        if (!out) throw Error("cannot write '" + tmp + "'");
+        out << json_.dump(2) << "\n";
+        if (!out) throw Error("error writing '" + tmp + "'");
+      }
+      std::filesystem::rename(tmp, path);
+    } catch (const std::exception& e) {
+      err = e.what();
+    }
+  }
+  comm.raiseIfAny(err);
+  return path;
+}
+
+}  // namespace coloc

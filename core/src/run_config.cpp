@@ -1,0 +1,37 @@
+#include "coloc/core/run_config.hpp"
+
+namespace coloc {
+
+void declareRunConfig(Schema& s) {
+  s.string("name", "case", "case name (default output folder out/<name>)");
+  s.string("description", "", "free text, copied to the report");
+  s.string("run.mode", "coupled", "what runs: coupled, fluid (CFD only), particles (DEM only), "
+           "dummy_dem (paper's case 2: particles frozen, every exchange done)",
+           {"coupled", "fluid", "particles", "dummy_dem"});
+  s.integer("run.steps", 10, "number of CFD (coupling) steps; 0: run until run.end_time",
+            Range::nonNegative());
+  s.number("run.end_time", 0.0, "simulated time to reach (s) when run.steps is 0",
+           Range::nonNegative());
+  s.number("run.progress_interval_s", 2.0, "seconds between progress lines on rank 0 (0: off)",
+           Range::nonNegative());
+}
+
+RunMode runMode(const Config& cfg) {
+  const auto m = cfg.string("run.mode");
+  if (m == "fluid") return RunMode::FluidOnly;
+  if (m == "particles") return RunMode::ParticlesOnly;
+  if (m == "dummy_dem") return RunMode::DummyDem;
+  return RunMode::Coupled;
+}
+
+const char* runModeName(RunMode m) {
+  switch (m) {
+    case RunMode::Coupled: return "coupled";
+    case RunMode::FluidOnly: return "fluid";
+    case RunMode::ParticlesOnly: return "particles";
+    case RunMode::DummyDem: return "dummy_dem";
+  }
+  return "?";
+}
+
+}  // namespace coloc

@@ -1,0 +1,89 @@
+#include "coloc/core/timers.hpp"
+
+#include <sys/resource.h>
+#include <time.h>
+
+namespace coloc {
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+void Timers::start(Phase p) {
+  auto& s = slots_[idx(p)];
+  s.wall0 = MPI_Wtime();
+  s.cpu0 = threadCpuSeconds();
+}
+
+void Timers::stop(Phase p) {
+  auto& s = slots_[idx(p)];
+  s.wall += MPI_Wtime() - s.wall0;
+  s.cpu += threadCpuSeconds() - s.cpu0;
+  ++s.calls;
+}
+
+void Timers::book(Exchange kind, long long bytes, long long messages, double seconds) {
+  auto& l = ledger_[idx(kind)];
+  l.bytes += bytes;
+  l.messages += messages;
+  l.seconds += seconds;
+}
+
+void Timers::reset() {
+  slots_ = {};
+  ledger_ = {};
+}
+
+Json Timers::report(const Comm& comm, double stepWallSeconds) const {
+  Json out = Json::object();
+  Json timers = Json::object();
+  std::array<double, 6> catAvg{};
+  double busyComputeLocal = 0;
+  for (std::size_t i = 0; i < kPhases.size(); ++i) {
+    const auto& s = slots_[i];
+    const auto w = comm.minMaxAvg(s.wall);
+    const auto b = comm.minMaxAvg(s.cpu);
+    const long long calls = comm.max(s.calls);
+    catAvg[static_cast<std::size_t>(kPhases[i].category)] += w.avg;
+    const auto cat = kPhases[i].category;
+    if (cat == Category::Fluid || cat == Category::Particles || cat == Category::Coupling)
+      busyComputeLocal += s.cpu;
+    if (calls == 0) continue;
+    timers[std::string(kPhases[i].name)] = {{"min", w.min},         {"avg", w.avg},
+                                            {"max", w.max},         {"calls", calls},
+                                            {"busy_avg", b.avg},    {"busy_max", b.max}};
+  }
+  out["timers"] = timers;
+  Json ex = Json::object();
+  for (std::size_t k = 0; k < ledger_.size(); ++k) {
+    const auto t = comm.minMaxAvg(ledger_[k].seconds);
+    ex[std::string(kExchangeNames[k])] = {{"bytes", comm.sum(ledger_[k].bytes)},
+                                          {"messages", comm.sum(ledger_[k].messages)},
+                                          {"time_s", t.avg},
+                                          {"time_s_max", t.max}};
+  }
+  out["exchange"] = ex;
+  const double denom = stepWallSeconds > 0 ? stepWallSeconds : 1.0;
+  out["fractions"] = {
+      {"fv", catAvg[static_cast<std::size_t>(Category::Fluid)] / denom},
+      {"dem", catAvg[static_cast<std::size_t>(Category::Particles)] / denom},
+      {"coupling", catAvg[static_cast<std::size_t>(Category::Coupling)] / denom},
+      {"inter_physics", catAvg[static_cast<std::size_t>(Category::InterPhysics)] / denom},
+      {"output", catAvg[static_cast<std::size_t>(Category::Output)] / denom}};
+  const auto busy = comm.minMaxAvg(busyComputeLocal);
+  out["load"] = {{"busy_s_min", busy.min},
+                 {"busy_s_avg", busy.avg},
+                 {"busy_s_max", busy.max},
+                 {"imbalance", busy.avg > 0 ? busy.max / busy.avg : 1.0}};
+  return out;
+}
+
+long long peakRssBytes() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return static_cast<long long>(ru.ru_maxrss) * 1024LL;  // Linux: kilobytes
+}
+
+}  // namespace coloc

@@ -1,0 +1,70 @@
+// coloc/partition/halo.hpp — the halo plan: built once for a field layout, reused every step.
+//
+// gather():     owned values -> neighbours' ghost layers (faces, edges and corners), by three
+//               staged sweeps x, y, z with non-blocking MPI; each sweep carries the ghosts filled
+//               by the previous ones, so edges and corners arrive without diagonal messages.
+// scatterSum(): the reverse (z, y, x): ghost contributions are sent to the owner and added to
+//               its owned values, then the ghosts are zeroed; used for deposition. At a
+//               non-periodic box face, Fold::Mirror adds ghost layer -1-m onto owned layer m
+//               (contributions of a kernel that pokes through a wall stay in the domain), Keep
+//               leaves them in the ghosts.
+// Buffers are allocated on first use for the largest field count seen and never again.
+// Every message is booked in the Timers ledger under the exchange kind the caller names.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "coloc/core/timers.hpp"
+#include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/field.hpp"
+
+namespace coloc {
+
+enum class Fold { Keep, Mirror };
+
+class HaloPlan {
+ public:
+  HaloPlan() = default;
+  /// Throws ConfigError if a block is thinner than the ghost width along an axis with neighbours.
+  HaloPlan(const Decomposition& dec, const FieldLayout& layout);
+
+  const FieldLayout& layout() const { return layout_; }
+
+  void gather(std::span<Field3<double>* const> fields, Timers* timers = nullptr,
+              Exchange kind = Exchange::IntraPhysics);
+  void gather(Field3<double>& f, Timers* timers = nullptr, Exchange kind = Exchange::IntraPhysics) {
+    Field3<double>* p = &f;
+    gather(std::span<Field3<double>* const>(&p, 1), timers, kind);
+  }
+  void scatterSum(std::span<Field3<double>* const> fields, Fold fold, Timers* timers = nullptr,
+                  Exchange kind = Exchange::InterPhysicsRemote);
+  void scatterSum(Field3<double>& f, Fold fold, Timers* timers = nullptr,
+                  Exchange kind = Exchange::InterPhysicsRemote) {
+    Field3<double>* p = &f;
+    scatterSum(std::span<Field3<double>* const>(&p, 1), fold, timers, kind);
+  }
+
+  /// Bytes this rank sends in one gather of one field (for reports and benchmarks).
+  long long bytesPerGather() const;
+
+ private:
+  struct Side {
+    int peer = MPI_PROC_NULL;
+    IndexBox ownedEdge;  // owned layers next to this side: sent by gather, summed into by scatter
+    IndexBox ghost;      // ghost layers beyond this side: received by gather, sent by scatter
+  };
+  void sweep(int d, std::span<Field3<double>* const> fields, bool reverse, Timers* timers,
+             Exchange kind);
+  void fold(int d, std::span<Field3<double>* const> fields);
+  void ensureBuffers(std::size_t nFields);
+
+  const Decomposition* dec_ = nullptr;
+  FieldLayout layout_;
+  int me_ = 0;
+  std::array<std::array<Side, 2>, 3> sides_{};
+  std::array<std::array<std::vector<double>, 2>, 3> sendBuf_, recvBuf_;
+  std::size_t buffersFor_ = 0;
+};
+
+}  // namespace coloc

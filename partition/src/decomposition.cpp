@@ -1,0 +1,203 @@
+#include "coloc/partition/decomposition.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+
+#include "coloc/core/error.hpp"
+
+namespace coloc {
+namespace {
+const char* kAxis[3] = {"x", "y", "z"};
+}
+
+std::vector<int> Decomposition::evenCuts(int n, int p) {
+  std::vector<int> c(static_cast<std::size_t>(p) + 1);
+  for (int i = 0; i <= p; ++i) c[static_cast<std::size_t>(i)] = i * (n / p) + std::min(i, n % p);
+  return c;
+}
+
+Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, Int3 dims) {
+  const int size = world.size();
+  for (int d = 0; d < 3; ++d) {
+    if (grid.cells[d] < 1)
+      throw ConfigError("grid.cells", std::string("the number of cells along ") + kAxis[d] +
+                                          " must be at least 1");
+    if (dims[d] < 0) throw ConfigError("partition.dims", "process counts must be >= 0");
+  }
+  int fixed = 1;
+  for (int d = 0; d < 3; ++d)
+    if (dims[d] > 0) fixed *= dims[d];
+  if (size % fixed != 0)
+    throw ConfigError("partition.dims", "the fixed process counts (product " +
+                                            std::to_string(fixed) + ") do not divide the " +
+                                            std::to_string(size) + " ranks");
+  if (dims[0] == 0 || dims[1] == 0 || dims[2] == 0) {
+    // MPI_Dims_create balances the free counts; the largest count goes to the free axis with
+    // the most cells so blocks stay close to cubes (fewest halo cells).
+    std::vector<int> freeAxes;
+    for (int d = 0; d < 3; ++d)
+      if (dims[d] == 0) freeAxes.push_back(d);
+    std::vector<int> counts(freeAxes.size(), 0);
+    MPI_Dims_create(size / fixed, static_cast<int>(counts.size()), counts.data());
+    std::sort(counts.begin(), counts.end(), std::greater<>());
+    std::stable_sort(freeAxes.begin(), freeAxes.end(),
+                     [&](int a, int b) { return grid.cells[a] > grid.cells[b]; });
+    for (std::size_t i = 0; i < freeAxes.size(); ++i) dims[freeAxes[i]] = counts[i];
+  }
+  int product = dims[0] * dims[1] * dims[2];
+  if (product != size)
+    throw ConfigError("partition.dims", "process grid " + std::to_string(dims[0]) + "x" +
+                                            std::to_string(dims[1]) + "x" +
+                                            std::to_string(dims[2]) + " does not match " +
+                                            std::to_string(size) + " ranks");
+  std::array<std::vector<int>, 3> cuts;
+  for (int d = 0; d < 3; ++d) {
+    if (dims[d] > grid.cells[d])
+      throw ConfigError("partition.dims",
+                        std::to_string(dims[d]) + " ranks along " + kAxis[d] + " but only " +
+                            std::to_string(grid.cells[d]) + " cells: each block needs a cell");
+    cuts[d] = evenCuts(grid.cells[d], dims[d]);
+  }
+  return fromCuts(world, grid, std::move(cuts));
+}
+
+Decomposition Decomposition::fromCuts(const Comm& world, const GlobalGrid& grid,
+                                      std::array<std::vector<int>, 3> cuts) {
+  Decomposition dec;
+  dec.grid_ = grid;
+  for (int d = 0; d < 3; ++d) {
+    const auto& c = cuts[d];
+    if (c.size() < 2 || c.front() != 0 || c.back() != grid.cells[d])
+      throw ConfigError("partition.cuts", std::string("cuts along ") + kAxis[d] +
+                                              " must run from 0 to the cell count");
+    for (std::size_t i = 1; i < c.size(); ++i)
+      if (c[i] <= c[i - 1])
+        throw ConfigError("partition.cuts", std::string("cuts along ") + kAxis[d] +
+                                                " must be strictly increasing (empty block)");
+    dec.dims_[d] = static_cast<int>(c.size()) - 1;
+  }
+  if (dec.dims_[0] * dec.dims_[1] * dec.dims_[2] != world.size())
+    throw ConfigError("partition.dims", "the process grid does not match the number of ranks");
+  dec.cuts_ = std::move(cuts);
+  dec.build(world);
+  return dec;
+}
+
+void Decomposition::build(const Comm& world) {
+  int periods[3] = {grid_.periodic[0], grid_.periodic[1], grid_.periodic[2]};
+  auto* c = new MPI_Comm(MPI_COMM_NULL);
+  MPI_Cart_create(world.raw(), 3, dims_.data(), periods, /*reorder=*/0, c);
+  cart_ = std::shared_ptr<MPI_Comm>(c, [](MPI_Comm* p) {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized && *p != MPI_COMM_NULL) MPI_Comm_free(p);
+    delete p;
+  });
+  comm_ = Comm(*cart_);
+  rank_ = comm_.rank();
+  size_ = comm_.size();
+  MPI_Cart_coords(*cart_, rank_, 3, coords_.data());
+  for (int d = 0; d < 3; ++d) {
+    lo_[d] = cuts_[d][static_cast<std::size_t>(coords_[d])];
+    hi_[d] = cuts_[d][static_cast<std::size_t>(coords_[d]) + 1];
+    int lowN = MPI_PROC_NULL, highN = MPI_PROC_NULL;
+    MPI_Cart_shift(*cart_, d, 1, &lowN, &highN);
+    nbr_[d] = {lowN, highN};
+  }
+}
+
+long long Decomposition::ownedCellCount() const {
+  const auto n = cells();
+  return 1LL * n[0] * n[1] * n[2];
+}
+
+Real3 Decomposition::blockLo() const {
+  Real3 x{};
+  for (int d = 0; d < 3; ++d) x[d] = grid_.origin[d] + lo_[d] * grid_.spacing(d);
+  return x;
+}
+
+Real3 Decomposition::blockHi() const {
+  Real3 x{};
+  for (int d = 0; d < 3; ++d)
+    x[d] = hi_[d] == grid_.cells[d] ? grid_.origin[d] + grid_.length[d]
+                                    : grid_.origin[d] + hi_[d] * grid_.spacing(d);
+  return x;
+}
+
+int Decomposition::rankOfCoords(Int3 c) const {
+  int r = 0;
+  MPI_Cart_rank(*cart_, c.data(), &r);
+  return r;
+}
+
+Int3 Decomposition::coordsOfRank(int r) const {
+  Int3 c{};
+  MPI_Cart_coords(*cart_, r, 3, c.data());
+  return c;
+}
+
+Int3 Decomposition::loOf(int r) const {
+  const auto c = coordsOfRank(r);
+  return {cuts_[0][static_cast<std::size_t>(c[0])], cuts_[1][static_cast<std::size_t>(c[1])],
+          cuts_[2][static_cast<std::size_t>(c[2])]};
+}
+
+Int3 Decomposition::hiOf(int r) const {
+  const auto c = coordsOfRank(r);
+  return {cuts_[0][static_cast<std::size_t>(c[0]) + 1], cuts_[1][static_cast<std::size_t>(c[1]) + 1],
+          cuts_[2][static_cast<std::size_t>(c[2]) + 1]};
+}
+
+int Decomposition::blockAlong(int d, int cell) const {
+  const auto& c = cuts_[d];
+  return static_cast<int>(std::upper_bound(c.begin(), c.end(), cell) - c.begin()) - 1;
+}
+
+int Decomposition::ownerOfCell(Int3 cell) const {
+  Int3 b{};
+  for (int d = 0; d < 3; ++d) {
+    int i = cell[d];
+    const int n = grid_.cells[d];
+    if (grid_.periodic[d]) i = ((i % n) + n) % n;
+    if (i < 0 || i >= n) return -1;
+    b[d] = blockAlong(d, i);
+  }
+  return rankOfCoords(b);
+}
+
+int Decomposition::ownerOfFace(int d, Int3 face) const {
+  Int3 cell = face;
+  if (!grid_.periodic[d] && face[d] == grid_.cells[d]) cell[d] = grid_.cells[d] - 1;
+  return ownerOfCell(cell);
+}
+
+Int3 Decomposition::cellOfPoint(Real3 x) const {
+  Int3 c{};
+  for (int d = 0; d < 3; ++d) {
+    const double s = (x[d] - grid_.origin[d]) / grid_.spacing(d);
+    c[d] = std::clamp(static_cast<int>(std::floor(s)), 0, grid_.cells[d] - 1);
+  }
+  return c;
+}
+
+int Decomposition::ownerOfPoint(Real3 x) const {
+  Int3 c{};
+  for (int d = 0; d < 3; ++d) {
+    double s = (x[d] - grid_.origin[d]) / grid_.spacing(d);
+    const int n = grid_.cells[d];
+    if (!std::isfinite(s)) return -1;
+    if (grid_.periodic[d]) {
+      s = std::fmod(s, static_cast<double>(n));
+      if (s < 0) s += n;
+    } else if (s < 0.0 || s > static_cast<double>(n)) {
+      return -1;
+    }
+    c[d] = std::clamp(static_cast<int>(std::floor(s)), 0, n - 1);
+  }
+  return ownerOfCell(c);
+}
+
+}  // namespace coloc

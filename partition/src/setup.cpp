@@ -1,0 +1,38 @@
+#include "coloc/partition/setup.hpp"
+
+namespace coloc {
+
+void declareDomainConfig(Schema& s) {
+  s.vec3("domain.origin", Real3{0, 0, 0}, "lower corner of the box (m)");
+  s.vec3("domain.length", std::nullopt, "size of the box along x, y, z (m)", Range::positive());
+  s.intVec3("domain.cells", std::nullopt, "number of cells along x, y, z", Range::atLeast(1));
+  s.boolean("domain.periodic.x", false, "periodic along x");
+  s.boolean("domain.periodic.y", false, "periodic along y");
+  s.boolean("domain.periodic.z", false, "periodic along z");
+  s.string("partition.strategy", "uniform",
+           "uniform: even Cartesian blocks shared by fluid and particles", {"uniform"});
+  s.intVec3("partition.dims", std::array<long long, 3>{0, 0, 0},
+            "process grid; 0 along an axis lets MPI_Dims_create choose", Range::nonNegative());
+}
+
+GlobalGrid gridFromConfig(const Config& cfg) {
+  GlobalGrid g;
+  g.origin = cfg.vec3("domain.origin");
+  g.length = cfg.vec3("domain.length");
+  const auto c = cfg.intVec3("domain.cells");
+  for (int d = 0; d < 3; ++d) {
+    if (c[d] > (1LL << 30)) throw ConfigError("domain.cells", "too many cells along an axis");
+    g.cells[d] = static_cast<int>(c[d]);
+  }
+  g.periodic = {cfg.boolean("domain.periodic.x"), cfg.boolean("domain.periodic.y"),
+                cfg.boolean("domain.periodic.z")};
+  return g;
+}
+
+Decomposition decompositionFromConfig(const Comm& world, const Config& cfg) {
+  const auto d = cfg.intVec3("partition.dims");
+  return Decomposition::uniform(world, gridFromConfig(cfg),
+                                {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])});
+}
+
+}  // namespace coloc

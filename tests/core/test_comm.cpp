@@ -1,0 +1,49 @@
+// The collective error path and the small MPI module.
+#include <gtest/gtest.h>
+
+#include "coloc/core/comm.hpp"
+#include "coloc/core/error.hpp"
+#include "coloc/core/timers.hpp"
+
+TEST(Comm, RaiseIfAnyThrowsOnEveryRankWithTheFirstMessage) {
+  const auto comm = coloc::Comm::world();
+  const int last = comm.size() - 1;
+  std::string local = comm.rank() == last ? "particle 17 left the box" : "";
+  try {
+    comm.raiseIfAny(local);
+    FAIL() << "no exception";
+  } catch (const coloc::Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("particle 17 left the box"), std::string::npos) << what;
+    if (comm.size() > 1) {
+      EXPECT_NE(what.find("rank " + std::to_string(last)), std::string::npos);
+    }
+  }
+  EXPECT_NO_THROW(comm.raiseIfAny(""));
+}
+
+TEST(Comm, ReductionsAndBroadcast) {
+  const auto comm = coloc::Comm::world();
+  const int n = comm.size();
+  EXPECT_EQ(comm.sum(comm.rank() + 1), n * (n + 1) / 2);
+  const auto m = comm.minMaxAvg(static_cast<double>(comm.rank()));
+  EXPECT_EQ(m.min, 0.0);
+  EXPECT_EQ(m.max, n - 1.0);
+  EXPECT_DOUBLE_EQ(m.avg, (n - 1) / 2.0);
+  EXPECT_EQ(comm.broadcast(comm.isRoot() ? std::string("hello") : std::string()), "hello");
+}
+
+TEST(Timers, ReportHasEveryTimedPhaseAndTheExchangeKinds) {
+  const auto comm = coloc::Comm::world();
+  coloc::Timers t;
+  t.start(coloc::Phase::DemForce);
+  t.stop(coloc::Phase::DemForce);
+  t.book(coloc::Exchange::InterPhysicsRemote, 100, 2, 0.5);
+  const auto j = t.report(comm, 1.0);
+  EXPECT_EQ(j["timers"]["dem_force"]["calls"].get<long long>(), 1);
+  EXPECT_FALSE(j["timers"].contains("fluid_momentum"));
+  EXPECT_EQ(j["exchange"]["inter_physics_remote"]["bytes"].get<long long>(), 100LL * comm.size());
+  EXPECT_EQ(j["exchange"]["intra_physics"]["messages"].get<long long>(), 0);
+  EXPECT_TRUE(j["fractions"].contains("inter_physics"));
+  EXPECT_GT(coloc::peakRssBytes(), 0);
+}

@@ -1,0 +1,101 @@
+// Case-file parsing, overrides and strict validation.
+#include <gtest/gtest.h>
+
+#include "coloc/core/config.hpp"
+
+using coloc::Config;
+using coloc::ConfigError;
+using coloc::Range;
+using coloc::Schema;
+
+namespace {
+
+Schema schema() {
+  Schema s;
+  s.number("fluid.nu", 1e-6, "kinematic viscosity", Range::positive());
+  s.integer("run.steps", 10, "steps", Range::nonNegative());
+  s.boolean("run.verbose", false, "chatty");
+  s.string("run.mode", "coupled", "mode", {"coupled", "fluid"});
+  s.vec3("domain.length", std::nullopt, "box", Range::positive());
+  s.list("particles.sources",
+         {{"lattice", Schema().intVec3("count", std::nullopt, "n", Range::atLeast(1))},
+          {"list", Schema().numberList("x", std::nullopt, "positions")}},
+         "particle sources");
+  return s;
+}
+
+std::string errorOf(const std::string& text, std::vector<std::string> overrides = {}) {
+  try {
+    Config::fromText(text, "case.json", overrides, schema());
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Config, DefaultsCommentsAndTypes) {
+  const auto cfg = Config::fromText(R"(// a comment
+    { /* block */ "domain": { "length": [1, 2, 3] } })", "c", {}, schema());
+  EXPECT_DOUBLE_EQ(cfg.number("fluid.nu"), 1e-6);
+  EXPECT_EQ(cfg.integer("run.steps"), 10);
+  EXPECT_EQ(cfg.string("run.mode"), "coupled");
+  EXPECT_EQ(cfg.vec3("domain.length")[2], 3.0);
+  EXPECT_TRUE(cfg.at("particles.sources").is_array());
+}
+
+TEST(Config, OverridesApplyBeforeValidation) {
+  const auto cfg = Config::fromText(R"({ "domain": { "length": [1, 2, 3] } })", "c",
+                                    {"run.steps=42", "run.mode=fluid", "domain.length=[4,5,6]",
+                                     "fluid.nu=2.5e-5"},
+                                    schema());
+  EXPECT_EQ(cfg.integer("run.steps"), 42);
+  EXPECT_EQ(cfg.string("run.mode"), "fluid");
+  EXPECT_EQ(cfg.vec3("domain.length")[0], 4.0);
+  EXPECT_DOUBLE_EQ(cfg.number("fluid.nu"), 2.5e-5);
+}
+
+TEST(Config, OverrideIntoListItem) {
+  const auto cfg = Config::fromText(
+      R"({ "domain": { "length": [1, 1, 1] },
+           "particles": { "sources": [ { "type": "lattice", "count": [1, 1, 1] } ] } })",
+      "c", {"particles.sources.0.count=[2,3,4]"}, schema());
+  EXPECT_EQ(cfg.at("particles.sources")[0]["count"][1].get<int>(), 3);
+}
+
+TEST(Config, ErrorsNameTheKeyPath) {
+  const std::string base = R"("domain": { "length": [1, 1, 1] })";
+  EXPECT_EQ(errorOf("{" + base + ", \"fluid\": { \"nuu\": 1 } }"),
+            "fluid.nuu: unknown key (did you mean 'fluid.nu'?)");
+  EXPECT_EQ(errorOf("{" + base + ", \"fluid\": { \"nu\": \"x\" } }"),
+            "fluid.nu: expected a number, got a string");
+  EXPECT_EQ(errorOf("{" + base + ", \"fluid\": { \"nu\": 0 } }"),
+            "fluid.nu: value 0 is out of range, expected (0, inf]");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"steps\": 1.5 } }"),
+            "run.steps: expected an integer, got a number");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"verbose\": 1 } }"),
+            "run.verbose: expected a boolean, got an integer");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"mode\": \"x\" } }"),
+            "run.mode: invalid value 'x', expected one of: coupled, fluid");
+  EXPECT_EQ(errorOf("{}"), "domain.length: required key is missing");
+  EXPECT_EQ(errorOf(R"({ "domain": { "length": [1, -1, 1] } })"),
+            "domain.length[1]: value -1 is out of range, expected (0, inf]");
+  EXPECT_EQ(errorOf("{" + base + R"(, "particles": { "sources": [ { "type": "blob" } ] } })"),
+            "particles.sources[0].type: unknown type 'blob', expected one of: lattice, list");
+  EXPECT_EQ(errorOf("{" + base + R"(, "particles": { "sources": [ { "type": "lattice" } ] } })"),
+            "particles.sources[0].count: required key is missing");
+  EXPECT_EQ(errorOf("{" + base + R"(, "particles": { "sources": [ { "count": [1,1,1] } ] } })"),
+            "particles.sources[0].type: required key is missing");
+  EXPECT_NE(errorOf("{ oops }").find("malformed JSON"), std::string::npos);
+  EXPECT_EQ(errorOf("{" + base + "}", {"run.steps"}),
+            "--set: expected key.path=value, got 'run.steps'");
+  EXPECT_EQ(errorOf("{" + base + "}", {"run.stepz=4"}),
+            "run.stepz: unknown key (did you mean 'run.steps'?)");
+}
+
+TEST(Config, DescribeListsEveryKey) {
+  const auto text = schema().describe();
+  for (const char* k : {"fluid.nu", "run.steps", "run.mode", "domain.length", "particles.sources"})
+    EXPECT_NE(text.find(k), std::string::npos) << k;
+}
