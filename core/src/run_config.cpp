@@ -8,6 +8,8 @@ void declareRunConfig(Schema& s) {
   s.string("run.mode", "coupled", "what runs: coupled, fluid (CFD only), particles (DEM only), "
            "dummy_dem (paper's case 2: particles frozen, every exchange done)",
            {"coupled", "fluid", "particles", "dummy_dem"});
+  s.vec3("gravity", std::array<double, 3>{0, 0, 0},
+         "gravitational acceleration (m/s^2), felt by the particles and the fluid");
   s.integer("run.steps", 10, "number of CFD (coupling) steps; 0: run until run.end_time",
             Range::nonNegative());
   s.number("run.end_time", 0.0, "simulated time to reach (s) when run.steps is 0",

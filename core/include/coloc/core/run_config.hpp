@@ -6,6 +6,7 @@
 
 namespace coloc {
 
+/// name, description, gravity, run.{mode,steps,end_time,progress_interval_s}.
 void declareRunConfig(Schema& s);
 
 /// What the run advances: both physics, one of them, or the paper's DummyDEM.

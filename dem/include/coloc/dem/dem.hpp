@@ -1,0 +1,59 @@
+// coloc/dem/dem.hpp — the linked-cell soft-sphere DEM (SPEC section 2).
+//
+// Contract with coupling/ (do not change without changing the coupling):
+//  - particles() holds owned particles in [0, nOwned) followed by ghosts; SoA arrays.
+//  - the coupling writes an external force per owned particle into fExt (N), held constant
+//    over the sub-steps until written again; it reads x, v, radius of owned particles.
+//    Owned particles may sit up to skin/2 outside the block between neighbour rebuilds.
+//  - setFrozen(true) is the paper's DummyDEM: particles never move and have no contacts, the
+//    coupling still does every exchange.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "coloc/core/config.hpp"
+#include "coloc/core/timers.hpp"
+#include "coloc/partition/decomposition.hpp"
+
+namespace coloc::dem {
+
+/// Declares the "particles.*" keys of the case file.
+void declareConfig(Schema& s);
+
+/// Structure of arrays; owned particles first, then ghosts.
+struct ParticleStore {
+  std::size_t nOwned = 0, nGhost = 0;
+  std::vector<std::int64_t> id;
+  std::vector<int> material;
+  std::array<std::vector<double>, 3> x, v, omega, f, torque, fExt;
+  std::vector<double> radius, mass;
+  std::size_t size() const { return nOwned + nGhost; }
+};
+
+class DemSolver {
+ public:
+  DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers);
+  ~DemSolver();
+  DemSolver(const DemSolver&) = delete;
+  DemSolver& operator=(const DemSolver&) = delete;
+
+  ParticleStore& particles();
+  const ParticleStore& particles() const;
+  /// One DEM step of dt(): forces, velocity Verlet, ghosts, rebuild/migration when needed.
+  void substep();
+  double dt() const;
+  double time() const;
+  void setFrozen(bool frozen);
+  long long globalCount() const;  // collective
+  /// Report entries: particles.{count,contacts_per_particle,rebuilds,...}. Collective.
+  Json diagnostics() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace coloc::dem

@@ -1,0 +1,71 @@
+// coloc/fv/fluid.hpp — the volume-averaged incompressible flow solver (SPEC section 1).
+//
+// Staggered MAC grid on the shared decomposition: p, eps, K, K*u_p at cell centres; u on faces.
+// Fractional-step projection; semi-implicit drag (Xiao & Sun 2011); the variable-coefficient
+// pressure equation  div( eps^2/A grad p ) = div(eps u*) + (eps^{n+1} - eps^n)/dt  solved with
+// hypre Struct PCG + PFMG (SMG selectable).
+//
+// Contract with coupling/ (do not change without changing the coupling):
+//  - the coupling writes fields().eps (eps^{n+1}), fields().K and fields().KUp on owned cells
+//    before step(); the solver keeps eps^n in fields().epsOld and copies eps -> epsOld at the
+//    end of step(). Fluid-only cases leave eps = 1 and K = 0 (or set them in tests).
+//  - drag at a face uses the arithmetic mean of the two adjacent cells' K and KUp, and
+//    cellVelocity() is the arithmetic mean of the two faces of a cell: the two averages are
+//    adjoint, so the drag the fluid loses equals the drag the particles gain to round-off.
+//  - K = sum_i beta_i / (rho_f V_cell) [1/s], KUp = sum_i beta_i u_p,i / (rho_f V_cell) [m/s^2].
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "coloc/core/config.hpp"
+#include "coloc/core/timers.hpp"
+#include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/field.hpp"
+
+namespace coloc::fv {
+
+/// Declares the "fluid.*" keys of the case file.
+void declareConfig(Schema& s);
+
+struct FluidFields {
+  FaceField u;                  // face-normal velocity components (m/s)
+  CellField p;                  // kinematic pressure p/rho_f (m^2/s^2)
+  CellField eps, epsOld;        // fluid volume fraction at n+1 and n
+  CellField K;                  // drag coefficient sum beta/(rho_f V) (1/s)
+  std::array<CellField, 3> KUp; // K * mean particle velocity (m/s^2)
+};
+
+class FluidSolver {
+ public:
+  FluidSolver(const Decomposition& dec, const Config& cfg, Timers& timers);
+  ~FluidSolver();
+  FluidSolver(const FluidSolver&) = delete;
+  FluidSolver& operator=(const FluidSolver&) = delete;
+
+  FluidFields& fields();
+  const FluidFields& fields() const;
+  /// Tell the solver eps or K changed since the last step (the matrix is rebuilt in step()).
+  void markCoefficientsChanged();
+  /// Advance one step of size dt.
+  void step(double dt);
+  /// The time step the case asks for now: fixed, or adaptive from CFL and viscous limits.
+  double nextDt() const;
+  double time() const;
+  long long stepCount() const;
+
+  /// Cell-centred velocity (mean of the two faces) with one ghost layer filled.
+  void cellVelocity(std::array<CellField, 3>& out);
+  /// Cell-centred gradient of the kinematic pressure with one ghost layer filled.
+  void pressureGradient(std::array<CellField, 3>& out);
+
+  /// Report entries: pressure.{iterations_avg,iterations_max,residual_last},
+  /// checks.mass_balance, fluid.* diagnostics. Collective.
+  Json diagnostics() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace coloc::fv
