@@ -1,0 +1,62 @@
+// coloc/coupling/kernel.hpp — deposition and interpolation kernels between particles and cells.
+//
+// A stencil lists, for each particle, the cells it talks to and their weights (summing to 1):
+//   centroid  (PCM): the cell containing the particle centre, weight 1;
+//   trilinear (cloud-in-cell): the 8 cells whose centres surround the particle centre, with
+//             tensor-product linear weights.
+// Deposition adds w * q_i to each stencil cell; interpolation reads sum_c w * f_c. The same
+// stencil is used for both within a coupling step, so the two are adjoint:
+//   sum_c f_c * deposit(q)_c == sum_i q_i * interpolate(f)_i,
+// which is what makes the drag exchange momentum-conserving to round-off.
+// Stencil cells may be ghost cells: deposits there are carried to their owner by the reverse halo
+// sum (Fold::Mirror at walls), and interpolation reads ghosts filled by the halo gather and by
+// fillWallGhostsByMirror() at walls, the adjoint of that fold.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/field.hpp"
+
+namespace coloc::coupling {
+
+enum class KernelKind { Centroid, Trilinear };
+KernelKind kernelFromName(const std::string& name);
+
+class Stencils {
+ public:
+  /// Computes the stencils of n particles at (x, y, z) for fields of `layout` on this block.
+  /// Returns the index of the first particle whose stencil reaches beyond the first ghost layer
+  /// (or -1); such a particle is clamped, and the caller raises the error.
+  long long compute(KernelKind kind, const Decomposition& dec, const FieldLayout& layout,
+                    std::span<const double> x, std::span<const double> y,
+                    std::span<const double> z, std::size_t n);
+  int width() const { return width_; }
+  std::size_t count() const { return n_; }
+  /// Linear indices into Field3::data() and weights of particle p.
+  std::span<const std::int64_t> cells(std::size_t p) const {
+    return {cell_.data() + p * width_, static_cast<std::size_t>(width_)};
+  }
+  std::span<const double> weights(std::size_t p) const {
+    return {weight_.data() + p * width_, static_cast<std::size_t>(width_)};
+  }
+
+ private:
+  int width_ = 1;
+  std::size_t n_ = 0;
+  std::vector<std::int64_t> cell_;
+  std::vector<double> weight_;
+};
+
+/// f_c += sum_i w_ic * scale * q_i over the stencils (q empty: q_i = 1).
+void deposit(const Stencils& s, std::span<const double> q, double scale, CellField& f);
+/// out_i = sum_c w_ic f_c.
+void interpolate(const Stencils& s, const CellField& f, std::span<double> out);
+/// Fill the ghost layers beyond non-periodic box faces with the mirror image of the owned layers
+/// (ghost -1-m <- owned m): the adjoint of the Fold::Mirror reverse halo sum.
+void fillWallGhostsByMirror(const Decomposition& dec, CellField& f);
+
+}  // namespace coloc::coupling

@@ -1,0 +1,117 @@
+// coloc/coupling/simulation.hpp — one simulation state and the coupled time step.
+//
+// The Simulation owns the decomposition shared by both physics, the fluid solver, the DEM, the
+// timers and the coupling buffers; nothing is global. One coupled step reads as the algorithm
+// (SPEC section 3, ../shared/ARCHITECTURE.md):
+//
+//   computeStencils()            particles' kernel cells and weights         (coupling)
+//   sampleFluidForDrag()         eps^n, u^n at the particles                 (inter-physics, local)
+//   evaluateDrag()               beta_i from the drag law                    (coupling)
+//   depositParticles()           V_p, beta, beta v_p -> cells                (inter-physics, local)
+//   sumDepositsAcrossBlocks()    reverse halo sum over block faces           (inter-physics, remote)
+//   updateFluidCoefficients()    eps^{n+1} = clip(1 - solid), K, K u_p       (coupling)
+//   advanceFluid()               fv::FluidSolver::step                      (fluid)
+//   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (inter-physics, local)
+//   applyCouplingForces()        F = beta (u - v) - V_p rho_f grad p         (coupling)
+//   advanceParticles()           n_sub DEM sub-steps                         (particles)
+//
+// Drag is semi-implicit in the fluid (Xiao & Sun 2011) and explicit, constant over the
+// sub-steps, for the particles, evaluated with the same u^{n+1} and v^n the fluid used, so the
+// momentum the fluid loses equals the drag impulse the particles receive to round-off.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "coloc/core/config.hpp"
+#include "coloc/core/run_config.hpp"
+#include "coloc/core/timers.hpp"
+#include "coloc/coupling/drag.hpp"
+#include "coloc/coupling/kernel.hpp"
+#include "coloc/dem/dem.hpp"
+#include "coloc/fv/fluid.hpp"
+#include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/halo.hpp"
+
+namespace coloc::coupling {
+
+/// Declares the "coupling.*" keys.
+void declareConfig(Schema& s);
+/// The schema of a whole case file: run, domain, partition, fluid, particles, coupling.
+Schema caseSchema();
+
+class Simulation {
+ public:
+  Simulation(const Comm& world, const Config& cfg);
+  ~Simulation();
+
+  /// One coupling step (what it advances depends on run.mode).
+  void step();
+  bool finished() const;
+
+  RunMode mode() const { return mode_; }
+  double time() const { return time_; }
+  long long steps() const { return steps_; }
+  long long demSubsteps() const { return substeps_; }
+  double lastDt() const { return lastDt_; }
+  const Decomposition& decomposition() const { return dec_; }
+  Timers& timers() { return timers_; }
+  fv::FluidSolver* fluid() { return fluid_.get(); }
+  dem::DemSolver* particles() { return dem_.get(); }
+
+  /// Drag impulse of the last step: what the particles received and what the fluid lost
+  /// (global sums, N s), and the worst relative mismatch over the run.
+  std::array<double, 3> particleDragImpulse() const { return particleImpulse_; }
+  std::array<double, 3> fluidDragImpulse() const { return fluidImpulse_; }
+  double momentumBalance() const { return momentumResidual_; }
+  /// Total solid volume deposited on the cells (global, m^3) after the last deposit.
+  double depositedSolidVolume() const { return solidVolume_; }
+
+  /// Report entries of the run (collective): throughput, exchange, fractions, checks, ...
+  Json report(double wallSeconds) const;
+
+ private:
+  void computeStencils();
+  void sampleFluidForDrag();
+  void evaluateDrag();
+  void depositParticles();
+  void sumDepositsAcrossBlocks();
+  void updateFluidCoefficients();
+  void advanceFluid(double dt);
+  void sampleFluidForForces();
+  void applyCouplingForces(double dt);
+  void advanceParticles(int n);
+  void refreshCellVelocity();
+  void resizeParticleBuffers(std::size_t n);
+
+  const Config& cfg_;
+  Decomposition dec_;
+  Timers timers_;
+  RunMode mode_;
+  std::unique_ptr<fv::FluidSolver> fluid_;
+  std::unique_ptr<dem::DemSolver> dem_;
+
+  // Coupling parameters.
+  KernelKind kernel_ = KernelKind::Trilinear;
+  DragLaw drag_ = DragLaw::DiFelice;
+  double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6;
+  bool coupled_ = false;
+
+  // Cell fields on the fluid's cell layout.
+  CellField solid_, eps_;
+  std::array<CellField, 3> uCell_, gradP_;
+  HaloPlan halo_;
+  Stencils stencils_;
+
+  // Per-particle buffers (owned particles; grow-only).
+  std::vector<double> volume_, beta_, epsAt_;
+  std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_;
+
+  double time_ = 0, lastDt_ = 0, endTime_ = 0;
+  long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
+  std::array<double, 3> particleImpulse_{}, fluidImpulse_{};
+  double momentumResidual_ = 0, solidVolume_ = 0;
+};
+
+}  // namespace coloc::coupling

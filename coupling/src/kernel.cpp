@@ -1,0 +1,124 @@
+#include "coloc/coupling/kernel.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "coloc/core/error.hpp"
+
+namespace coloc::coupling {
+
+KernelKind kernelFromName(const std::string& name) {
+  if (name == "centroid") return KernelKind::Centroid;
+  if (name == "trilinear") return KernelKind::Trilinear;
+  throw ConfigError("coupling.kernel", "unknown kernel '" + name + "'");
+}
+
+long long Stencils::compute(KernelKind kind, const Decomposition& dec, const FieldLayout& layout,
+                            std::span<const double> x, std::span<const double> y,
+                            std::span<const double> z, std::size_t n) {
+  width_ = kind == KernelKind::Centroid ? 1 : 8;
+  n_ = n;
+  if (cell_.size() < n * width_) {
+    cell_.resize(n * width_);
+    weight_.resize(n * width_);
+  }
+  const auto lo = dec.blockLo();
+  const auto& g = dec.grid();
+  const double inv[3] = {1.0 / g.spacing(0), 1.0 / g.spacing(1), 1.0 / g.spacing(2)};
+  // Stencils reach at most one ghost layer (the layer the solvers keep filled for the coupling).
+  IndexBox box = layout.allocated();
+  for (int d = 0; d < 3; ++d) {
+    box.lo[d] = std::max(box.lo[d], -1);
+    box.hi[d] = std::min(box.hi[d], layout.n[d] + 1);
+  }
+  const auto e = layout.extent();
+  const std::int64_t sy = e[0], sz = static_cast<std::int64_t>(e[0]) * e[1];
+  const std::int64_t off = layout.ghost + layout.ghost * sy + layout.ghost * sz;
+  long long bad = -1;
+  for (std::size_t p = 0; p < n; ++p) {
+    const double s[3] = {(x[p] - lo[0]) * inv[0], (y[p] - lo[1]) * inv[1], (z[p] - lo[2]) * inv[2]};
+    std::int64_t* c = cell_.data() + p * width_;
+    double* w = weight_.data() + p * width_;
+    if (kind == KernelKind::Centroid) {
+      int i[3];
+      for (int d = 0; d < 3; ++d) {
+        i[d] = static_cast<int>(std::floor(s[d]));
+        // A centre exactly on the top face of the box belongs to the last cell.
+        if (i[d] == layout.n[d] && dec.atHighBoundary(d)) i[d] = layout.n[d] - 1;
+        if (i[d] < box.lo[d] || i[d] >= box.hi[d]) bad = bad < 0 ? static_cast<long long>(p) : bad;
+        i[d] = std::clamp(i[d], box.lo[d], box.hi[d] - 1);
+      }
+      c[0] = off + i[0] + i[1] * sy + i[2] * sz;
+      w[0] = 1.0;
+      continue;
+    }
+    int i0[3];
+    double t[3];
+    for (int d = 0; d < 3; ++d) {
+      const double u = s[d] - 0.5;
+      i0[d] = static_cast<int>(std::floor(u));
+      t[d] = u - i0[d];
+      if (i0[d] < box.lo[d] || i0[d] + 1 >= box.hi[d]) {
+        bad = bad < 0 ? static_cast<long long>(p) : bad;
+        i0[d] = std::clamp(i0[d], box.lo[d], box.hi[d] - 2);
+      }
+    }
+    int m = 0;
+    for (int dk = 0; dk < 2; ++dk)
+      for (int dj = 0; dj < 2; ++dj)
+        for (int di = 0; di < 2; ++di, ++m) {
+          c[m] = off + (i0[0] + di) + (i0[1] + dj) * sy + (i0[2] + dk) * sz;
+          w[m] = (di ? t[0] : 1.0 - t[0]) * (dj ? t[1] : 1.0 - t[1]) * (dk ? t[2] : 1.0 - t[2]);
+        }
+  }
+  return bad;
+}
+
+void deposit(const Stencils& s, std::span<const double> q, double scale, CellField& f) {
+  double* data = f.data().data();
+  const int w = s.width();
+  for (std::size_t p = 0; p < s.count(); ++p) {
+    const double v = scale * (q.empty() ? 1.0 : q[p]);
+    const auto c = s.cells(p);
+    const auto wt = s.weights(p);
+    for (int m = 0; m < w; ++m) data[c[m]] += wt[m] * v;
+  }
+}
+
+void interpolate(const Stencils& s, const CellField& f, std::span<double> out) {
+  const double* data = f.data().data();
+  const int w = s.width();
+  for (std::size_t p = 0; p < s.count(); ++p) {
+    const auto c = s.cells(p);
+    const auto wt = s.weights(p);
+    double acc = 0.0;
+    for (int m = 0; m < w; ++m) acc += wt[m] * data[c[m]];
+    out[p] = acc;
+  }
+}
+
+void fillWallGhostsByMirror(const Decomposition& dec, CellField& f) {
+  const auto& l = f.layout();
+  const IndexBox all = l.allocated();
+  // Axis by axis over the full transverse extent, so edges and corners mirror twice, exactly as
+  // the fold of the reverse sum adds them.
+  for (int d = 0; d < 3; ++d) {
+    for (int side = 0; side < 2; ++side) {
+      if (side == 0 ? !dec.atLowBoundary(d) : !dec.atHighBoundary(d)) continue;
+      for (int m = 0; m < l.ghost; ++m) {
+        const int ghost = side == 0 ? -1 - m : l.n[d] + m;
+        const int owned = side == 0 ? std::min(m, l.n[d] - 1) : std::max(l.n[d] - 1 - m, 0);
+        IndexBox layer = all;
+        layer.lo[d] = ghost;
+        layer.hi[d] = ghost + 1;
+        forEach(layer, [&](int i, int j, int k) {
+          int src[3] = {i, j, k};
+          src[d] = owned;
+          f(i, j, k) = f(src[0], src[1], src[2]);
+        });
+      }
+    }
+  }
+}
+
+}  // namespace coloc::coupling

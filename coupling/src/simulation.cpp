@@ -1,0 +1,324 @@
+#include "coloc/coupling/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "coloc/core/error.hpp"
+#include "coloc/partition/setup.hpp"
+
+namespace coloc::coupling {
+
+void declareConfig(Schema& s) {
+  s.string("coupling.kernel", "trilinear",
+           "deposition/interpolation kernel: centroid (PCM) or trilinear (cloud-in-cell)",
+           {"centroid", "trilinear"});
+  s.string("coupling.drag", "difelice", "drag law: stokes, difelice, gidaspow, beetstra",
+           {"stokes", "difelice", "gidaspow", "beetstra"});
+  s.number("coupling.eps_min", 0.3, "lower clip of the fluid fraction", Range::openClosed(0.0, 1.0));
+  s.integer("coupling.dem_substeps", 0,
+            "DEM sub-steps per CFD step; 0: the CFD step divided by particles.dt",
+            Range::nonNegative());
+}
+
+Schema caseSchema() {
+  Schema s;
+  declareRunConfig(s);
+  declareDomainConfig(s);
+  fv::declareConfig(s);
+  dem::declareConfig(s);
+  declareConfig(s);
+  return s;
+}
+
+namespace {
+constexpr double kPi = std::numbers::pi;
+}
+
+Simulation::Simulation(const Comm& world, const Config& cfg)
+    : cfg_(cfg), dec_(decompositionFromConfig(world, cfg)), mode_(runMode(cfg)) {
+  ScopedPhase setup(timers_, Phase::Setup);
+  maxSteps_ = cfg.integer("run.steps");
+  endTime_ = cfg.number("run.end_time");
+  if (maxSteps_ == 0 && endTime_ <= 0)
+    throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
+  if (mode_ != RunMode::ParticlesOnly) fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
+  if (mode_ != RunMode::FluidOnly) {
+    dem_ = std::make_unique<dem::DemSolver>(dec_, cfg, timers_);
+    if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
+  }
+  coupled_ = mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem;
+  if (!coupled_) return;
+
+  kernel_ = kernelFromName(cfg.string("coupling.kernel"));
+  drag_ = dragLawFromName(cfg.string("coupling.drag"));
+  epsMin_ = cfg.number("coupling.eps_min");
+  rhoF_ = cfg.number("fluid.rho");
+  nu_ = cfg.number("fluid.nu");
+  const FieldLayout layout = fluid_->fields().p.layout();
+  solid_ = CellField(layout);
+  eps_ = CellField(layout, 1.0);
+  for (int d = 0; d < 3; ++d) {
+    uCell_[d] = CellField(layout);
+    gradP_[d] = CellField(layout);
+  }
+  halo_ = HaloPlan(dec_, layout);
+
+  // The initial porosity: deposit the particle volume once and start with eps^0 = eps^1 so the
+  // first step sees no spurious d(eps)/dt.
+  computeStencils();
+  evaluateDrag();  // beta is not used yet; sizes the buffers
+  depositParticles();
+  sumDepositsAcrossBlocks();
+  updateFluidCoefficients();
+  auto& f = fluid_->fields();
+  forEach(layout.interior(), [&](int i, int j, int k) {
+    f.epsOld(i, j, k) = f.eps(i, j, k);
+    f.K(i, j, k) = 0.0;
+    for (int d = 0; d < 3; ++d) f.KUp[d](i, j, k) = 0.0;
+  });
+  refreshCellVelocity();
+}
+
+Simulation::~Simulation() = default;
+
+bool Simulation::finished() const {
+  if (maxSteps_ > 0) return steps_ >= maxSteps_;
+  return time_ >= endTime_ * (1.0 - 1e-12);
+}
+
+void Simulation::step() {
+  switch (mode_) {
+    case RunMode::FluidOnly: {
+      const double dt = fluid_->nextDt();
+      advanceFluid(dt);
+      lastDt_ = dt;
+      break;
+    }
+    case RunMode::ParticlesOnly: {
+      const long long n = std::max<long long>(1, cfg_.integer("coupling.dem_substeps"));
+      advanceParticles(static_cast<int>(n));
+      lastDt_ = static_cast<double>(n) * dem_->dt();
+      break;
+    }
+    case RunMode::Coupled:
+    case RunMode::DummyDem: {
+      // The CFD step is a whole number of DEM steps, as large as the fluid allows.
+      long long nSub = cfg_.integer("coupling.dem_substeps");
+      if (nSub == 0)
+        nSub = std::max<long long>(1, static_cast<long long>(std::floor(fluid_->nextDt() / dem_->dt() + 1e-9)));
+      const double dt = static_cast<double>(nSub) * dem_->dt();
+      computeStencils();
+      sampleFluidForDrag();
+      evaluateDrag();
+      depositParticles();
+      sumDepositsAcrossBlocks();
+      updateFluidCoefficients();
+      advanceFluid(dt);
+      refreshCellVelocity();
+      sampleFluidForForces();
+      applyCouplingForces(dt);
+      advanceParticles(static_cast<int>(nSub));
+      lastDt_ = dt;
+      break;
+    }
+  }
+  time_ += lastDt_;
+  ++steps_;
+}
+
+void Simulation::resizeParticleBuffers(std::size_t n) {
+  if (volume_.size() >= n) return;
+  const std::size_t cap = std::max(n, volume_.size() + volume_.size() / 4);
+  for (auto* v : {&volume_, &beta_, &epsAt_}) v->resize(cap);
+  for (int d = 0; d < 3; ++d)
+    for (auto* a : {&uAt_, &vDep_, &betaV_, &gradPAt_}) (*a)[d].resize(cap);
+}
+
+void Simulation::computeStencils() {
+  ScopedPhase t(timers_, Phase::CouplingDeposit);
+  const auto& p = dem_->particles();
+  const std::size_t n = p.nOwned;
+  resizeParticleBuffers(n);
+  const long long bad = stencils_.compute(kernel_, dec_, solid_.layout(), p.x[0], p.x[1], p.x[2], n);
+  std::string err;
+  if (bad >= 0) {
+    const auto i = static_cast<std::size_t>(bad);
+    std::ostringstream os;
+    os << "particle " << p.id[i] << " at (" << p.x[0][i] << ", " << p.x[1][i] << ", " << p.x[2][i]
+       << ") is more than one cell outside its block: it cannot be coupled (check particles.skin "
+          "and the time step)";
+    err = os.str();
+  }
+  dec_.comm().raiseIfAny(err);
+  for (std::size_t i = 0; i < n; ++i) volume_[i] = 4.0 / 3.0 * kPi * std::pow(p.radius[i], 3);
+}
+
+void Simulation::sampleFluidForDrag() {
+  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  const std::size_t n = stencils_.count();
+  interpolate(stencils_, eps_, epsAt_);
+  for (int d = 0; d < 3; ++d) interpolate(stencils_, uCell_[d], uAt_[d]);
+  timers_.book(Exchange::InterPhysicsLocal,
+               static_cast<long long>(n * 4 * (stencils_.width() + 1) * sizeof(double)), 0);
+}
+
+void Simulation::evaluateDrag() {
+  ScopedPhase t(timers_, Phase::CouplingDrag);
+  const auto& p = dem_->particles();
+  const std::size_t n = stencils_.count();
+  for (std::size_t i = 0; i < n; ++i) {
+    double slip2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      vDep_[d][i] = p.v[d][i];
+      const double s = uAt_[d][i] - p.v[d][i];
+      slip2 += s * s;
+    }
+    const double eps = std::clamp(epsAt_[i], epsMin_, 1.0);
+    beta_[i] = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
+    for (int d = 0; d < 3; ++d) betaV_[d][i] = beta_[i] * vDep_[d][i];
+  }
+}
+
+void Simulation::depositParticles() {
+  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  auto& f = fluid_->fields();
+  const double vCell = dec_.grid().cellVolume();
+  const double s = 1.0 / (rhoF_ * vCell);
+  solid_.fill(0.0);
+  f.K.fill(0.0);
+  for (int d = 0; d < 3; ++d) f.KUp[d].fill(0.0);
+  const std::size_t n = stencils_.count();
+  deposit(stencils_, std::span<const double>(volume_.data(), n), 1.0 / vCell, solid_);
+  deposit(stencils_, std::span<const double>(beta_.data(), n), s, f.K);
+  for (int d = 0; d < 3; ++d)
+    deposit(stencils_, std::span<const double>(betaV_[d].data(), n), s, f.KUp[d]);
+  timers_.book(Exchange::InterPhysicsLocal,
+               static_cast<long long>(n * 5 * (stencils_.width() + 1) * sizeof(double)), 0);
+}
+
+void Simulation::sumDepositsAcrossBlocks() {
+  ScopedPhase t(timers_, Phase::ExchangeRemote);
+  auto& f = fluid_->fields();
+  Field3<double>* fields[5] = {&solid_, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
+  halo_.scatterSum(fields, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
+}
+
+void Simulation::updateFluidCoefficients() {
+  {
+    ScopedPhase t(timers_, Phase::CouplingDeposit);
+    auto& f = fluid_->fields();
+    double solid = 0;
+    forEach(solid_.interior(), [&](int i, int j, int k) {
+      solid += solid_(i, j, k);
+      const double e = std::clamp(1.0 - solid_(i, j, k), epsMin_, 1.0);
+      f.eps(i, j, k) = e;
+      eps_(i, j, k) = e;
+    });
+    solidVolume_ = dec_.comm().sum(solid) * dec_.grid().cellVolume();
+  }
+  ScopedPhase t(timers_, Phase::FluidHalo);
+  halo_.gather(eps_, &timers_, Exchange::IntraPhysics);
+  fillWallGhostsByMirror(dec_, eps_);
+  fluid_->markCoefficientsChanged();
+}
+
+void Simulation::advanceFluid(double dt) { fluid_->step(dt); }
+
+void Simulation::refreshCellVelocity() {
+  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  fluid_->cellVelocity(uCell_);
+  for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
+}
+
+void Simulation::sampleFluidForForces() {
+  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  fluid_->pressureGradient(gradP_);
+  for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
+  const std::size_t n = stencils_.count();
+  for (int d = 0; d < 3; ++d) {
+    interpolate(stencils_, uCell_[d], uAt_[d]);
+    interpolate(stencils_, gradP_[d], gradPAt_[d]);
+  }
+  timers_.book(Exchange::InterPhysicsLocal,
+               static_cast<long long>(n * 6 * (stencils_.width() + 1) * sizeof(double)), 0);
+}
+
+void Simulation::applyCouplingForces(double dt) {
+  ScopedPhase t(timers_, Phase::CouplingDrag);
+  auto& p = dem_->particles();
+  const std::size_t n = stencils_.count();
+  double sums[6] = {0, 0, 0, 0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const double drag = beta_[i] * (uAt_[d][i] - vDep_[d][i]);
+      p.fExt[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
+      sums[d] += drag * dt;
+    }
+  }
+  // What the fluid lost through its drag term over the step: rho V (K u - K u_p) dt per cell.
+  const auto& f = fluid_->fields();
+  const double rv = rhoF_ * dec_.grid().cellVolume() * dt;
+  forEach(solid_.interior(), [&](int i, int j, int k) {
+    for (int d = 0; d < 3; ++d)
+      sums[3 + d] -= rv * (f.K(i, j, k) * uCell_[d](i, j, k) - f.KUp[d](i, j, k));
+  });
+  dec_.comm().sumInPlace(std::span<double>(sums, 6));
+  double scale = 0, diff = 0;
+  for (int d = 0; d < 3; ++d) {
+    particleImpulse_[d] = sums[d];
+    fluidImpulse_[d] = sums[3 + d];
+    scale = std::max({scale, std::abs(sums[d]), std::abs(sums[3 + d])});
+    diff = std::max(diff, std::abs(sums[d] + sums[3 + d]));
+  }
+  if (scale > 0) momentumResidual_ = std::max(momentumResidual_, diff / scale);
+}
+
+void Simulation::advanceParticles(int n) {
+  for (int s = 0; s < n; ++s) dem_->substep();
+  substeps_ += n;
+}
+
+Json Simulation::report(double wallSeconds) const {
+  const Comm& comm = dec_.comm();
+  Json out = timers_.report(comm, wallSeconds);
+  const double wall = comm.max(wallSeconds);
+  out["mpi"] = {{"ranks", comm.size()}, {"dims", {dec_.dims()[0], dec_.dims()[1], dec_.dims()[2]}}};
+  out["run"] = {{"mode", runModeName(mode_)},
+                {"steps", steps_},
+                {"dem_substeps", substeps_},
+                {"sim_time", time_},
+                {"wall_s", wall}};
+  const long long particles = dem_ ? dem_->globalCount() : 0;
+  const double cells = static_cast<double>(dec_.grid().cellCount());
+  out["throughput"] = {
+      {"cell_steps_per_s", fluid_ && wall > 0 ? cells * static_cast<double>(steps_) / wall : 0.0},
+      {"particle_steps_per_s",
+       dem_ && wall > 0 ? static_cast<double>(particles) * static_cast<double>(substeps_) / wall : 0.0}};
+  out["checks"] = {{"momentum_balance", momentumResidual_}, {"mass_balance", 0.0}};
+  if (fluid_) {
+    const Json fd = fluid_->diagnostics();
+    for (auto& [k, v] : fd.items()) {
+      if (out.contains(k) && out[k].is_object() && v.is_object())
+        for (auto& [k2, v2] : v.items()) out[k][k2] = v2;
+      else
+        out[k] = v;
+    }
+  }
+  if (dem_) {
+    const Json pd = dem_->diagnostics();
+    for (auto& [k, v] : pd.items()) {
+      if (out.contains(k) && out[k].is_object() && v.is_object())
+        for (auto& [k2, v2] : v.items()) out[k][k2] = v2;
+      else
+        out[k] = v;
+    }
+  }
+  if (coupled_) out["coupling"] = {{"solid_volume", solidVolume_},
+                                   {"kernel", kernel_ == KernelKind::Centroid ? "centroid" : "trilinear"},
+                                   {"drag", dragLawName(drag_)}};
+  return out;
+}
+
+}  // namespace coloc::coupling
