@@ -1,69 +1,141 @@
 #include "run.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/report.hpp"
-#include "coloc/core/run_config.hpp"
-#include "coloc/core/timers.hpp"
-#include "coloc/partition/field.hpp"
-#include "coloc/partition/halo.hpp"
-#include "coloc/partition/setup.hpp"
+#include "coloc/coupling/simulation.hpp"
 
 namespace coloc {
 namespace {
 
-Schema caseSchema() {
-  Schema s;
-  declareRunConfig(s);
-  declareDomainConfig(s);
-  return s;
-}
+/// Rank 0 prints a progress line every `interval` seconds: step, time, rate, time left.
+class Progress {
+ public:
+  Progress(const Comm& comm, double interval) : root_(comm.isRoot()), interval_(interval) {
+    t0_ = last_ = MPI_Wtime();
+  }
+  void update(const coupling::Simulation& sim, long long maxSteps, double endTime) {
+    if (!root_ || interval_ <= 0) return;
+    const double now = MPI_Wtime();
+    if (now - last_ < interval_) return;
+    last_ = now;
+    const double rate = static_cast<double>(sim.steps()) / (now - t0_);
+    double left = 0;
+    if (maxSteps > 0)
+      left = static_cast<double>(maxSteps - sim.steps()) / std::max(rate, 1e-300);
+    else if (sim.time() > 0)
+      left = (endTime - sim.time()) / sim.time() * (now - t0_);
+    std::printf("coloc: step %lld  t = %.6g s  dt = %.3g s  %.2f steps/s  %.0f s left\n",
+                sim.steps(), sim.time(), sim.lastDt(), rate, left);
+    std::fflush(stdout);
+  }
+
+ private:
+  bool root_;
+  double interval_, t0_, last_;
+};
+
+/// A per-step time series of the first particles and of coupling totals (series.csv).
+class Series {
+ public:
+  Series(const Comm& comm, const std::string& path, coupling::Simulation& sim) : comm_(comm) {
+    auto* dem = sim.particles();
+    tracked_ = dem ? std::min<long long>(dem->globalCount(), 4) : 0;
+    if (!comm_.isRoot()) return;
+    out_.open(path);
+    out_ << "step,time,solid_volume,fluid_accel_l1";
+    for (long long p = 0; p < tracked_; ++p)
+      for (const char* q : {"x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz"})
+        out_ << ",p" << p << "_" << q;
+    out_ << "\n";
+  }
+  void record(coupling::Simulation& sim) {
+    std::vector<double> row(static_cast<std::size_t>(9 * tracked_), 0.0);
+    if (auto* dem = sim.particles()) {
+      const auto& p = dem->particles();
+      for (std::size_t i = 0; i < p.nOwned; ++i) {
+        if (p.id[i] >= tracked_) continue;
+        double* r = row.data() + 9 * p.id[i];
+        for (int d = 0; d < 3; ++d) {
+          r[d] = p.x[d][i];
+          r[3 + d] = p.v[d][i];
+          r[6 + d] = p.fExt[d][i];
+        }
+      }
+    }
+    comm_.sumInPlace(std::span<double>(row));
+    if (!comm_.isRoot()) return;
+    char buf[64];
+    out_ << sim.steps();
+    for (double v : {sim.time(), sim.depositedSolidVolume(), sim.fluidAccelerationL1()}) {
+      std::snprintf(buf, sizeof buf, ",%.17g", v);
+      out_ << buf;
+    }
+    for (double v : row) {
+      std::snprintf(buf, sizeof buf, ",%.17g", v);
+      out_ << buf;
+    }
+    out_ << "\n";
+  }
+
+ private:
+  const Comm& comm_;
+  long long tracked_ = 0;
+  std::ofstream out_;
+};
 
 }  // namespace
 
-std::string describeKeys() { return "Case-file keys (dotted paths; --set takes the same):\n" + caseSchema().describe(); }
+std::string describeKeys() {
+  return "Case-file keys (dotted paths; --set takes the same):\n" + coupling::caseSchema().describe();
+}
 
 int runCase(const Comm& world, const RunOptions& opts) {
   const double t0 = MPI_Wtime();
-  Timers timers;
-  timers.start(Phase::Setup);
-  const Config cfg = Config::load(world, opts.casePath, opts.overrides, caseSchema());
-  const Decomposition dec = decompositionFromConfig(world, cfg);
-  const std::string outDir =
-      opts.outDir.empty() ? (std::filesystem::path("out") / cfg.string("name")).string() : opts.outDir;
+  const Config cfg = Config::load(world, opts.casePath, opts.overrides, coupling::caseSchema());
+  const std::string outDir = opts.outDir.empty()
+                                 ? (std::filesystem::path("out") / cfg.string("name")).string()
+                                 : opts.outDir;
+  if (world.isRoot()) makeDirectories(outDir);
+  coupling::Simulation sim(world, cfg);
+  const double setupWall = MPI_Wtime() - t0;
+  if (world.isRoot() && !opts.quiet) {
+    const auto& dec = sim.decomposition();
+    std::printf("coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
+                "set-up %.2f s\n",
+                cfg.string("name").c_str(), runModeName(sim.mode()), dec.size(), dec.dims()[0],
+                dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()),
+                sim.particles() ? sim.particles()->globalCount() : 0LL, setupWall);
+  }
+  Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"));
+  Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);
+  const double tLoop = MPI_Wtime();
+  while (!sim.finished()) {
+    sim.step();
+    series.record(sim);
+    progress.update(sim, cfg.integer("run.steps"), cfg.number("run.end_time"));
+  }
+  const double loopWall = MPI_Wtime() - tLoop;
 
-  // Until the solvers run here, the job reports the decomposition and one halo exchange of a
-  // cell field and of the three face components: what every step will move.
-  CellField cell(cellLayout(dec, 1));
-  HaloPlan cellHalo(dec, cell.layout());
-  timers.stop(Phase::Setup);
-  timers.start(Phase::FluidHalo);
-  cellHalo.gather(cell, &timers, Exchange::IntraPhysics);
-  timers.stop(Phase::FluidHalo);
-
-  const auto cells = dec.ownedCellCount();
-  const auto cellsMM = dec.comm().minMaxAvg(static_cast<double>(cells));
   Report report(opts.casePath, cfg.json());
-  report.set("mpi.ranks", dec.size());
-  report.set("mpi.dims", Json::array({dec.dims()[0], dec.dims()[1], dec.dims()[2]}));
-  report.set("run.mode", runModeName(runMode(cfg)));
-  report.set("run.steps", 0);
-  report.set("run.dem_substeps", 0);
-  report.set("run.sim_time", 0.0);
-  report.set("decomposition.cells_total", dec.grid().cellCount());
-  report.set("decomposition.cells_per_rank", {{"min", cellsMM.min}, {"avg", cellsMM.avg}, {"max", cellsMM.max}});
-  report.set("decomposition.halo_bytes_per_field", dec.comm().sum(cellHalo.bytesPerGather()));
-  const double wall = MPI_Wtime() - t0;
-  report.merge(timers.report(dec.comm(), wall));
-  report.set("run.wall_s", dec.comm().max(wall));
-  report.addMemory(dec.comm());
-  const std::string path = report.write(dec.comm(), outDir);
+  report.merge(sim.report(loopWall));
+  report.set("run.setup_s", world.max(setupWall));
+  report.set("run.total_wall_s", world.max(MPI_Wtime() - t0));
+  report.addMemory(world);
+  const std::string path = report.write(world, outDir);
   if (world.isRoot()) {
-    std::printf("coloc: case '%s' on %d rank(s), process grid %dx%dx%d, %lld cells (%.0f-%.0f per rank)\n",
-                cfg.string("name").c_str(), dec.size(), dec.dims()[0], dec.dims()[1], dec.dims()[2],
-                static_cast<long long>(dec.grid().cellCount()), cellsMM.min, cellsMM.max);
+    const auto& j = report.json();
+    std::printf("coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
+                "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
+                j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
+                j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
+                j["throughput"]["cell_steps_per_s"].get<double>(),
+                j["throughput"]["particle_steps_per_s"].get<double>(),
+                100.0 * j["fractions"]["inter_physics"].get<double>());
     std::printf("coloc: report written to %s\n", path.c_str());
   }
   return 0;

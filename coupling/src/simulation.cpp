@@ -61,6 +61,7 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
   eps_ = CellField(layout, 1.0);
   for (int d = 0; d < 3; ++d) {
     uCell_[d] = CellField(layout);
+    uCellOld_[d] = CellField(layout);
     gradP_[d] = CellField(layout);
   }
   halo_ = HaloPlan(dec_, layout);
@@ -224,12 +225,24 @@ void Simulation::updateFluidCoefficients() {
   fluid_->markCoefficientsChanged();
 }
 
-void Simulation::advanceFluid(double dt) { fluid_->step(dt); }
+void Simulation::advanceFluid(double dt) {
+  fluid_->step(dt);
+  lastStepDt_ = dt;
+}
 
 void Simulation::refreshCellVelocity() {
   ScopedPhase t(timers_, Phase::ExchangeLocal);
+  std::swap(uCell_, uCellOld_);
   fluid_->cellVelocity(uCell_);
   for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
+  // L1 norm of the fluid acceleration over the step (time series of benchmark 1).
+  if (lastStepDt_ > 0) {
+    double accel = 0;
+    forEach(solid_.interior(), [&](int i, int j, int k) {
+      for (int d = 0; d < 3; ++d) accel += std::abs(uCell_[d](i, j, k) - uCellOld_[d](i, j, k));
+    });
+    accelL1_ = dec_.comm().sum(accel) * dec_.grid().cellVolume() / lastStepDt_;
+  }
 }
 
 void Simulation::sampleFluidForForces() {

@@ -65,6 +65,8 @@ class Simulation {
   std::array<double, 3> particleDragImpulse() const { return particleImpulse_; }
   std::array<double, 3> fluidDragImpulse() const { return fluidImpulse_; }
   double momentumBalance() const { return momentumResidual_; }
+  /// L1 norm of the cell-centred fluid acceleration over the last step, sum |du/dt| V (m^4/s^2).
+  double fluidAccelerationL1() const { return accelL1_; }
   /// Total solid volume deposited on the cells (global, m^3) after the last deposit.
   double depositedSolidVolume() const { return solidVolume_; }
 
@@ -100,7 +102,7 @@ class Simulation {
 
   // Cell fields on the fluid's cell layout.
   CellField solid_, eps_;
-  std::array<CellField, 3> uCell_, gradP_;
+  std::array<CellField, 3> uCell_, uCellOld_, gradP_;
   HaloPlan halo_;
   Stencils stencils_;
 
@@ -108,10 +110,10 @@ class Simulation {
   std::vector<double> volume_, beta_, epsAt_;
   std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_;
 
-  double time_ = 0, lastDt_ = 0, endTime_ = 0;
+  double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
   std::array<double, 3> particleImpulse_{}, fluidImpulse_{};
-  double momentumResidual_ = 0, solidVolume_ = 0;
+  double momentumResidual_ = 0, solidVolume_ = 0, accelL1_ = 0;
 };
 
 }  // namespace coloc::coupling
