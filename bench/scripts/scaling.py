@@ -1,0 +1,168 @@
+#!/usr/bin/python3
+"""Strong scaling of a coloc case: run it over rank counts and modes, collect the reports,
+write a CSV table and PNG plots.
+
+    bench/scripts/scaling.py bench/cases/case2-small.json --ranks 1 2 4 --repeat 3 \
+        --modes coupled fluid particles --out bench/results/case2-small
+
+On a cluster pass the launcher, e.g. --launcher "srun -n {n}" (default "mpiexec -n {n}").
+Any `--set key=value` after `--` goes to every run. Points with more ranks than this machine's
+cores are marked "oversubscribed" in the CSV and on the plots.
+
+Outputs (in --out): scaling.csv (one row per run), speedup.png (coupled vs fluid-only vs
+particles-only against ranks), shares.png (fluid / particles / coupling / inter-physics shares of
+the coupled step against ranks), inter_physics.png (the inter-physics exchange share against
+ranks, as in the paper).
+"""
+import argparse
+import csv
+import json
+import os
+import shlex
+import subprocess
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+
+def run_point(args, n, mode, rep):
+    out = os.path.join(args.out, "runs", f"{mode}_np{n}_r{rep}")
+    launcher = args.launcher.format(n=n)
+    cmd = shlex.split(launcher) + [args.coloc, "run", args.case, "--quiet", "--out", out,
+                                   "--set", f"run.mode={mode}"]
+    for s in args.set:
+        cmd += ["--set", s]
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    print("scaling:", " ".join(cmd), flush=True)
+    subprocess.run(cmd, check=True, env=env)
+    with open(os.path.join(out, "report.json")) as f:
+        return json.load(f)
+
+
+def row_of(report, n, mode, rep, cores):
+    t = report["timers"]
+    step = report["run"]["wall_s"] / max(report["run"]["steps"], 1)
+    fr = report["fractions"]
+    ex = report["exchange"]
+    return {
+        "mode": mode, "ranks": n, "repeat": rep, "oversubscribed": int(n > cores),
+        "steps": report["run"]["steps"], "wall_s": report["run"]["wall_s"], "s_per_step": step,
+        "setup_s": report["run"].get("setup_s", 0.0),
+        "frac_fv": fr["fv"], "frac_dem": fr["dem"], "frac_coupling": fr["coupling"],
+        "frac_inter_physics": fr["inter_physics"],
+        "inter_local_bytes": ex["inter_physics_local"]["bytes"],
+        "inter_remote_bytes": ex["inter_physics_remote"]["bytes"],
+        "inter_remote_messages": ex["inter_physics_remote"]["messages"],
+        "intra_bytes": ex["intra_physics"]["bytes"],
+        "cell_steps_per_s": report["throughput"]["cell_steps_per_s"],
+        "particle_steps_per_s": report["throughput"]["particle_steps_per_s"],
+        "peak_rss_bytes_sum": report["memory"]["peak_rss_bytes_sum"],
+        "imbalance": report.get("load", {}).get("imbalance", 1.0),
+        "exchange_remote_s": t.get("exchange_remote", {}).get("max", 0.0),
+    }
+
+
+def best(rows, mode):
+    """Per rank count, the fastest repeat (the usual strong-scaling convention)."""
+    out = {}
+    for r in rows:
+        if r["mode"] != mode:
+            continue
+        n = r["ranks"]
+        if n not in out or r["s_per_step"] < out[n]["s_per_step"]:
+            out[n] = r
+    return [out[n] for n in sorted(out)]
+
+
+def plot(rows, args, cores):
+    name = os.path.basename(args.case).replace(".json", "")
+    note = f" (ranks > {cores} oversubscribed on this machine)" if any(r["oversubscribed"] for r in rows) else ""
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for mode, style in (("coupled", "o-"), ("fluid", "s--"), ("particles", "^:"), ("dummy_dem", "d-.")):
+        pts = best(rows, mode)
+        if not pts:
+            continue
+        base = pts[0]["s_per_step"] * pts[0]["ranks"]
+        ax.plot([p["ranks"] for p in pts], [base / p["s_per_step"] for p in pts], style, label=mode)
+    ns = sorted({r["ranks"] for r in rows})
+    ax.plot(ns, ns, "k-", lw=0.5, label="ideal")
+    for r in rows:
+        if r["oversubscribed"]:
+            ax.axvspan(cores + 0.5, max(ns) + 0.5, color="0.9", zorder=0)
+            break
+    ax.set_xlabel("MPI ranks")
+    ax.set_ylabel("speedup")
+    ax.set_title(f"{name}: strong scaling{note}", fontsize=9)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "speedup.png"), dpi=120)
+
+    pts = best(rows, "coupled") or best(rows, "dummy_dem")
+    if pts:
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        x = [p["ranks"] for p in pts]
+        for key, label in (("frac_fv", "fluid"), ("frac_dem", "particles"),
+                           ("frac_coupling", "coupling arithmetic"),
+                           ("frac_inter_physics", "inter-physics exchange")):
+            ax.plot(x, [100 * p[key] for p in pts], "o-", label=label)
+        ax.set_xlabel("MPI ranks")
+        ax.set_ylabel("share of the coupled step (%)")
+        ax.set_title(f"{name}: time shares{note}", fontsize=9)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(os.path.join(args.out, "shares.png"), dpi=120)
+
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        ax.plot(x, [100 * p["frac_inter_physics"] for p in pts], "o-")
+        ax.set_xlabel("MPI ranks")
+        ax.set_ylabel("inter-physics exchange (% of the step)")
+        ax.set_title(f"{name}: inter-physics share{note}", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(os.path.join(args.out, "inter_physics.png"), dpi=120)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("case")
+    p.add_argument("--ranks", type=int, nargs="+", default=[1, os.cpu_count() or 1])
+    p.add_argument("--modes", nargs="+", default=["coupled", "fluid", "particles"])
+    p.add_argument("--repeat", type=int, default=1)
+    p.add_argument("--launcher", default="mpiexec -n {n} --bind-to none")
+    p.add_argument("--coloc", default=os.path.join(ROOT, "build", "coloc"))
+    p.add_argument("--out", default=None)
+    p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
+    p.add_argument("--plot-only", action="store_true", help="re-plot an existing scaling.csv")
+    p.add_argument("set", nargs="*", help="key=value overrides (after --)")
+    args = p.parse_args()
+    if args.out is None:
+        args.out = os.path.join(ROOT, "bench", "results", os.path.basename(args.case).replace(".json", ""))
+    os.makedirs(args.out, exist_ok=True)
+    csv_path = os.path.join(args.out, "scaling.csv")
+    rows = []
+    if args.plot_only:
+        with open(csv_path) as f:
+            for r in csv.DictReader(f):
+                rows.append({k: (v if k == "mode" else float(v)) for k, v in r.items()})
+                rows[-1]["ranks"] = int(rows[-1]["ranks"])
+    else:
+        for n in args.ranks:
+            for mode in args.modes:
+                for rep in range(args.repeat):
+                    rows.append(row_of(run_point(args, n, mode, rep), n, mode, rep, args.cores))
+        with open(csv_path, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+            w.writeheader()
+            w.writerows(rows)
+    plot(rows, args, args.cores)
+    print(f"scaling: wrote {csv_path} and plots in {args.out}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
