@@ -18,14 +18,9 @@ std::vector<int> Decomposition::evenCuts(int n, int p) {
   return c;
 }
 
-Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, Int3 dims) {
-  const int size = world.size();
-  for (int d = 0; d < 3; ++d) {
-    if (grid.cells[d] < 1)
-      throw ConfigError("grid.cells", std::string("the number of cells along ") + kAxis[d] +
-                                          " must be at least 1");
+Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims) {
+  for (int d = 0; d < 3; ++d)
     if (dims[d] < 0) throw ConfigError("partition.dims", "process counts must be >= 0");
-  }
   int fixed = 1;
   for (int d = 0; d < 3; ++d)
     if (dims[d] > 0) fixed *= dims[d];
@@ -46,6 +41,16 @@ Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, 
                      [&](int a, int b) { return grid.cells[a] > grid.cells[b]; });
     for (std::size_t i = 0; i < freeAxes.size(); ++i) dims[freeAxes[i]] = counts[i];
   }
+  return dims;
+}
+
+Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, Int3 dims) {
+  const int size = world.size();
+  for (int d = 0; d < 3; ++d)
+    if (grid.cells[d] < 1)
+      throw ConfigError("grid.cells", std::string("the number of cells along ") + kAxis[d] +
+                                          " must be at least 1");
+  dims = chooseDims(size, grid, dims);
   int product = dims[0] * dims[1] * dims[2];
   if (product != size)
     throw ConfigError("partition.dims", "process grid " + std::to_string(dims[0]) + "x" +

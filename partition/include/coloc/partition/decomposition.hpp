@@ -42,6 +42,8 @@ class Decomposition {
   /// Blocks from explicit cuts (each axis: 0 = c_0 < c_1 < ... < c_P = N).
   static Decomposition fromCuts(const Comm& world, const GlobalGrid& grid,
                                 std::array<std::vector<int>, 3> cuts);
+  /// The process grid the uniform strategy uses for `size` ranks (non-zero entries are kept).
+  static Int3 chooseDims(int size, const GlobalGrid& grid, Int3 dims = {0, 0, 0});
   /// The even split of n cells over p blocks.
   static std::vector<int> evenCuts(int n, int p);
 
