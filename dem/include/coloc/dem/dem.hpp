@@ -51,6 +51,26 @@ class DemSolver {
   /// Report entries: particles.{count,contacts_per_particle,rebuilds,...}. Collective.
   Json diagnostics() const;
 
+  // Additions beyond the coupling contract (tests, benchmarks, reports).
+  /// Forces a neighbour rebuild now: migration, re-sort by bin, ghosts, Verlet lists. Collective.
+  void rebuildNow();
+  /// Recomputes the forces at the current state without advancing the contact history.
+  void computeForcesNow();
+  /// Elastic energy stored in the normal springs of all contacts (J). Collective.
+  double contactEnergy() const;
+  /// Largest diameter + skin (m), the skin (m), the bin edge along each axis (m).
+  double interactionRange() const;
+  double skin() const;
+  std::array<double, 3> binSize() const;
+  /// Neighbour rebuilds since construction (the construction's own build not counted).
+  long long rebuildCount() const;
+  /// Bytes held by this rank's particle structures (arrays, lists, bins, buffers: capacities).
+  std::size_t memoryBytes() const;
+  /// Touching particle-particle contacts seen by this rank's owned particles in the last force
+  /// computation (each contact counted once per owned partner), and particle-wall contacts.
+  long long localContacts() const;
+  long long localWallContacts() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

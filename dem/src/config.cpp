@@ -1,0 +1,119 @@
+// The "particles.*" keys of the case file (see docs/dem.md for the meaning of each choice).
+#include <cmath>
+
+#include "coloc/dem/dem.hpp"
+
+namespace coloc::dem {
+
+namespace {
+Schema commonSource() {
+  Schema s;
+  s.integer("material", 0, "index into particles.materials", Range::nonNegative());
+  s.vec3("velocity", std::array<double, 3>{0, 0, 0}, "initial velocity (m/s)");
+  s.number("velocity_spread", 0.0,
+           "each velocity component gets a uniform random addition in [-spread, spread] (m/s), "
+           "drawn from the particle's id",
+           Range::nonNegative());
+  return s;
+}
+}  // namespace
+
+void declareConfig(Schema& s) {
+  s.number("particles.dt", 1e-5, "DEM time step (s); refused above particles.dt_fraction of the "
+           "Rayleigh time (Hertz) or of the collision time (linear)", Range::positive());
+  s.number("particles.dt_fraction", 0.2,
+           "largest allowed dt as a fraction of the Rayleigh time (hertz_mindlin) or of the "
+           "linear collision time pi sqrt(m*/k_n) (linear)",
+           Range::openClosed(0, 1));
+  s.number("particles.skin", 0.2,
+           "Verlet skin as a fraction of the largest particle diameter; lists are rebuilt when a "
+           "particle moved more than skin/2",
+           Range::positive());
+  s.string("particles.contact_model", "hertz_mindlin",
+           "hertz_mindlin: Hertz normal + Mindlin no-slip tangential with history (LIGGGHTS "
+           "formulas); linear: spring-dashpot with history",
+           {"hertz_mindlin", "linear"});
+  s.number("particles.linear.kn", 1e3, "normal stiffness of the linear model (N/m)",
+           Range::positive());
+  s.number("particles.linear.kt_ratio", 2.0 / 7.0, "k_t / k_n of the linear model",
+           Range::nonNegative());
+  {
+    Schema m;
+    m.number("density", 2500.0, "particle density (kg/m^3)", Range::positive());
+    m.number("young", 1e7, "Young's modulus E (Pa)", Range::positive());
+    m.number("poisson", 0.3, "Poisson ratio", Range::between(0.0, 0.5));
+    m.number("restitution", 0.9, "coefficient of restitution e", Range::openClosed(0.0, 1.0));
+    m.number("friction", 0.5, "Coulomb friction coefficient", Range::nonNegative());
+    m.number("rolling_friction", 0.0,
+             "rolling resistance coefficient (constant directional torque); 0: off",
+             Range::nonNegative());
+    s.list("particles.materials", {{"", m}},
+           "materials: [{density, young, poisson, restitution, friction, rolling_friction}]");
+  }
+  s.integer("particles.wall_material", 0, "material of the box walls", Range::nonNegative());
+  s.boolean("particles.walls", true, "planar walls on every non-periodic face of the box");
+  s.integer("particles.bin_cells", 0,
+            "bin edge = this many CFD cells (0: automatic, the smallest bin that coincides with "
+            "the cells and holds the interaction range)",
+            Range::nonNegative());
+  s.integer("particles.bin_split", 0,
+            "bin edge = CFD cell / this number (0: automatic); exclusive with bin_cells",
+            Range::nonNegative());
+  s.number("particles.overlap_limit", 0.2,
+           "largest overlap allowed, as a fraction of the smaller radius; beyond it the run stops",
+           Range::positive());
+  s.integer("particles.seed", 12345, "seed of the particle generation streams",
+            Range::nonNegative());
+  {
+    std::map<std::string, Schema> src;
+    Schema list = commonSource();
+    list.numberList("positions", std::nullopt, "x0 y0 z0 x1 y1 z1 ... (m)");
+    list.number("radius", 0.0, "radius of every particle (m), unless radii is given",
+                Range::nonNegative());
+    list.numberList("radii", std::vector<double>{}, "one radius per particle (m)",
+                    Range::positive());
+    list.numberList("velocities", std::vector<double>{},
+                    "vx0 vy0 vz0 ... (m/s), overrides velocity", Range::any());
+    src["list"] = list;
+
+    Schema lat = commonSource();
+    lat.vec3("lo", std::nullopt, "centre of the first particle (m)");
+    lat.intVec3("counts", std::nullopt, "particles along x, y, z", Range::atLeast(1));
+    lat.vec3("spacing", std::nullopt, "centre distance along x, y, z (m)", Range::positive());
+    lat.number("radius", std::nullopt, "radius (m)", Range::positive());
+    lat.number("jitter", 0.0,
+               "random displacement per axis as a fraction of the free gap (spacing/2 - radius)",
+               Range::between(0.0, 1.0));
+    src["lattice"] = lat;
+
+    Schema rnd = commonSource();
+    rnd.vec3("lo", std::nullopt, "region lower corner (m)");
+    rnd.vec3("hi", std::nullopt, "region upper corner (m)");
+    rnd.integer("count", std::nullopt, "number of particles", Range::nonNegative());
+    rnd.number("radius", std::nullopt, "radius, or smallest radius with radius_max (m)",
+               Range::positive());
+    rnd.number("radius_max", 0.0, "largest radius for a uniform radius distribution (0: mono)",
+               Range::nonNegative());
+    rnd.number("gap", 0.05,
+               "sites are cubes of edge 2 r_max (1 + gap); each particle sits at a random free "
+               "position inside its own randomly chosen site (non-overlapping by construction)",
+               Range::nonNegative());
+    src["random"] = rnd;
+
+    Schema lay = commonSource();
+    lay.vec3("lo", std::nullopt, "region lower corner (m)");
+    lay.vec3("hi", std::nullopt, "region upper corner (m)");
+    lay.integer("count", std::nullopt, "number of particles", Range::nonNegative());
+    lay.number("radius", std::nullopt, "radius (m)", Range::positive());
+    lay.string("axis", "z", "layers are stacked along this axis, from lo upwards", {"x", "y", "z"});
+    lay.number("gap", 0.05, "site edge = 2 r (1 + gap)", Range::nonNegative());
+    lay.number("jitter", 0.5, "random displacement per axis as a fraction of the free gap",
+               Range::between(0.0, 1.0));
+    src["layered"] = lay;
+    s.list("particles.sources", src,
+           "particle sources: {type: list|lattice|random|layered, ...}; global ids follow the "
+           "order of the sources");
+  }
+}
+
+}  // namespace coloc::dem

@@ -1,0 +1,1070 @@
+// dem/src/dem.cpp — the linked-cell soft-sphere DEM on the shared decomposition.
+//
+// One sub-step (velocity Verlet, as LAMMPS/LIGGGHTS run it):
+//   1. v += dt/2 F/m, x += dt v, omega += dt/2 T/I                     (DemIntegrate)
+//   2. one allreduce: largest displacement since the last rebuild and largest overlap
+//      -> rebuild when any particle moved more than skin/2            (DemNeighbor)
+//   3. rebuild: contact history packed per particle, migration in three sweeps x, y, z
+//      (DemMigrate); owned particles re-sorted by (bin, id) (DemNeighbor); ghosts within the
+//      interaction range of every block face in three sweeps x, y, z, so edges and corners are
+//      covered, periodic faces shift positions by the box length (DemGhost); bins and Verlet
+//      lists (DemNeighbor).  Otherwise: ghost positions/velocities refreshed along the same
+//      send lists (DemGhost).
+//   4. forces: gravity + fExt + contacts + walls                        (DemForce)
+//   5. v += dt/2 F/m, omega += dt/2 T/I                                 (DemIntegrate)
+//
+// Determinism across rank counts. The Verlet list is a full list (each owned particle holds
+// every partner, owned or ghost) and a particle's row visits the 27 stencil bins in a fixed
+// order and, inside a bin, partners in increasing global id. The force on a particle is thus
+// the same sum in the same order at any rank count, and trajectories agree bit for bit between
+// 1, 2 and 4 ranks (what the serial-vs-parallel test checks, with the 1e-10 bound of the
+// issue). The price is that each contact is evaluated twice (once per partner); the gain is
+// that no force is ever sent back to a ghost's owner, the tangential history of a contact is
+// simply a property of each particle's row (keyed by the partner's global id) and travels with
+// the particle at migration.
+//
+// Ownership follows the bins: a particle belongs to the rank whose bins contain
+// floor((x - origin)/bin) along each axis (clamped into the box). Bin edges coincide with CFD
+// cell edges (a bin is k cells or 1/k cell), so block edges are bin edges.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <span>
+#include <sstream>
+
+#include "coloc/dem/dem.hpp"
+#include "contact.hpp"
+#include "generate.hpp"
+
+namespace coloc::dem {
+
+using detail::Material;
+using detail::Model;
+using detail::PairCoeff;
+
+namespace {
+constexpr int kTagGhostCount = 4100, kTagGhost = 4200, kTagUpdate = 4300, kTagMigCount = 4400,
+              kTagMig = 4500;
+constexpr int kGhostBuild = 13;  // id, material, radius, mass, x3, v3, omega3
+constexpr int kGhostUpdate = 9;  // x3, v3, omega3
+constexpr int kMigFixed = 17;    // id, material, radius, mass, x3, v3, omega3, fExt3, nhist
+const char* kAxis[3] = {"x", "y", "z"};
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os.precision(4);
+  os << v;
+  return os.str();
+}
+
+template <class T>
+std::size_t cap(const std::vector<T>& v) {
+  return v.capacity() * sizeof(T);
+}
+}  // namespace
+
+struct DemSolver::Impl {
+  Impl(const Decomposition& d, const Config& cfg, Timers& t);
+
+  const Decomposition& dec;
+  Comm comm;
+  Timers& timers;
+  ParticleStore p;
+
+  // physics
+  Model model = Model::HertzMindlin;
+  double dt = 1e-5, time = 0;
+  bool frozen = false;
+  double g[3] = {0, 0, 0};
+  std::vector<Material> mats;
+  int nMat = 0;
+  std::vector<PairCoeff> pairC;  // [a * nMat + b]
+  std::vector<PairCoeff> wallC;  // [a]
+  std::array<std::array<bool, 2>, 3> wallOn{};
+  double skin = 0, rc = 0, overlapLimit = 0.2, dtFraction = 0.2;
+
+  // bins
+  Real3 origin{}, L{}, bs{}, lo{}, hi{};
+  std::array<bool, 3> periodic{};
+  std::array<long long, 3> NbG{}, binLo{}, binHi{};
+  Int3 nb{}, nbx{};  // local bins, and with one ghost layer on each side
+  std::vector<int> binOf, binStart, binItems;
+
+  // Verlet list (full, owned rows)
+  std::vector<int> rowStart, nbr;
+  std::vector<double> shear;
+  std::array<std::vector<double>, 3> x0;
+
+  // contact history per particle (between list builds and in migration)
+  std::vector<int> hStart, hStart2;
+  std::vector<std::int64_t> hId, hId2;
+  std::vector<double> hS, hS2;
+
+  // ghost plan: send lists per axis and side (0: to the low neighbour, 1: to the high one)
+  struct Swap {
+    std::vector<int> send;
+    double shift = 0;
+    int recvStart = 0, recvCount = 0;  // ghosts received from the opposite neighbour
+  };
+  std::array<std::array<Swap, 2>, 3> swaps;
+  std::array<std::vector<double>, 2> sbuf, rbuf;
+
+  // scratch (grow-only)
+  std::vector<int> perm, iscr;
+  std::vector<double> dscr;
+  std::vector<std::int64_t> lscr;
+
+  // diagnostics
+  long long rebuilds = 0, steps = 0, contacts = 0, wallContacts = 0;
+  double maxOverlap = 0;
+  std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
+
+  // setup
+  void readMaterials(const Config& cfg);
+  void setupBins(const Config& cfg, double dmax, bool any);
+  void checkTimeStep();
+  void addParticle(const detail::NewParticle& q);
+  long long gbinRaw(double x, int d) const {
+    const double s = std::floor((x - origin[d]) / bs[d]);
+    if (!(s > -1e15)) return -(1LL << 50);
+    if (!(s < 1e15)) return 1LL << 50;
+    return static_cast<long long>(s);
+  }
+  long long gbinClamped(double x, int d) const {
+    return std::clamp(gbinRaw(x, d), 0LL, NbG[d] - 1);
+  }
+  bool owns(const double* x) const {
+    for (int d = 0; d < 3; ++d) {
+      const long long b = gbinClamped(x[d], d);
+      if (b < binLo[d] || b >= binHi[d]) return false;
+    }
+    return true;
+  }
+
+  // steps
+  void substep();
+  void initialIntegrate();
+  void finalIntegrate();
+  bool decideRebuild();
+  void rebuild(bool first);
+  void packHistory();
+  void migrate();
+  void sortByBin();
+  void buildGhosts();
+  void updateGhosts();
+  void buildLists();
+  void computeForces(bool update);
+  template <Model M>
+  void forces(bool update);
+  void exchange(int d, int tagBase, bool sizesKnown);
+  void resizeAll(std::size_t n);
+  std::size_t memory() const;
+  void checkOverlap(double globalMax);
+};
+
+// ---------------------------------------------------------------------------------------------
+// setup
+
+DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
+    : dec(d), comm(d.comm()), timers(t) {
+  ScopedPhase setup(timers, Phase::Setup);
+  const auto& grid = dec.grid();
+  dt = cfg.number("particles.dt");
+  model = cfg.string("particles.contact_model") == "linear" ? Model::Linear : Model::HertzMindlin;
+  const auto grav = cfg.vec3("gravity");
+  for (int k = 0; k < 3; ++k) g[k] = grav[k];
+  overlapLimit = cfg.number("particles.overlap_limit");
+  dtFraction = cfg.number("particles.dt_fraction");
+  hStart.assign(1, 0);
+  readMaterials(cfg);
+
+  const auto info = detail::inspectSources(cfg, grid, nMat);
+  double rmax = 0;
+  long long total = 0;
+  for (const auto& s : info) {
+    if (s.count > 0) rmax = std::max(rmax, s.rmax);
+    total += s.count;
+  }
+  if (total > 0 && nMat == 0)
+    throw ConfigError("particles.materials", "at least one material is required");
+  const double dmax = 2 * rmax;
+  skin = cfg.number("particles.skin") * dmax;
+  rc = dmax + skin;
+  const bool wallsOn = cfg.boolean("particles.walls");
+  for (int k = 0; k < 3; ++k)
+    wallOn[k] = {wallsOn && !grid.periodic[k] && dec.atLowBoundary(k),
+                 wallsOn && !grid.periodic[k] && dec.atHighBoundary(k)};
+  setupBins(cfg, dmax, total > 0);
+
+  detail::generate(
+      cfg, info, lo, hi, [this](const double* x) { return owns(x); },
+      [this](const detail::NewParticle& q) { addParticle(q); });
+  checkTimeStep();
+  rebuild(true);
+  {
+    ScopedPhase f(timers, Phase::DemForce);
+    computeForces(false);
+  }
+  checkOverlap(comm.max(maxOverlap));
+}
+
+void DemSolver::Impl::readMaterials(const Config& cfg) {
+  const auto& list = cfg.at("particles.materials");
+  for (const auto& m : list) {
+    Material mt;
+    mt.density = m["density"].get<double>();
+    mt.young = m["young"].get<double>();
+    mt.poisson = m["poisson"].get<double>();
+    mt.restitution = m["restitution"].get<double>();
+    mt.friction = m["friction"].get<double>();
+    mt.rollingFriction = m["rolling_friction"].get<double>();
+    mats.push_back(mt);
+  }
+  nMat = static_cast<int>(mats.size());
+  if (nMat == 0) return;
+  const auto wm = cfg.integer("particles.wall_material");
+  if (wm >= nMat)
+    throw ConfigError("particles.wall_material",
+                      "no such material (" + std::to_string(nMat) + " declared)");
+  const double kn = cfg.number("particles.linear.kn");
+  const double ktr = cfg.number("particles.linear.kt_ratio");
+  pairC.resize(static_cast<std::size_t>(nMat * nMat));
+  wallC.resize(static_cast<std::size_t>(nMat));
+  for (int a = 0; a < nMat; ++a) {
+    for (int b = 0; b < nMat; ++b)
+      pairC[static_cast<std::size_t>(a * nMat + b)] = detail::mix(mats[a], mats[b], kn, ktr);
+    wallC[static_cast<std::size_t>(a)] =
+        detail::mix(mats[a], mats[static_cast<std::size_t>(wm)], kn, ktr);
+  }
+}
+
+void DemSolver::Impl::setupBins(const Config& cfg, double dmax, bool any) {
+  const auto& grid = dec.grid();
+  const long long kc = cfg.integer("particles.bin_cells");
+  const long long ks = cfg.integer("particles.bin_split");
+  if (kc > 0 && ks > 0)
+    throw ConfigError("particles.bin_split", "give particles.bin_cells or particles.bin_split, "
+                                             "not both");
+  const auto range = [&] {
+    return "the interaction range " + fmt(rc) + " m (largest diameter " + fmt(dmax) +
+           " m + skin " + fmt(skin) + " m)";
+  };
+  for (int d = 0; d < 3; ++d) {
+    origin[d] = grid.origin[d];
+    L[d] = grid.length[d];
+    periodic[d] = grid.periodic[d];
+    const double h = grid.spacing(d);
+    const auto& cuts = dec.cuts()[d];
+    const auto divides = [&](long long k) {
+      return std::all_of(cuts.begin(), cuts.end(), [k](int c) { return c % k == 0; });
+    };
+    long long multiple = 1, split = 1;
+    std::string key;
+    if (ks > 0) {
+      split = ks;
+      key = "particles.bin_split";
+    } else if (kc > 0) {
+      multiple = kc;
+      key = "particles.bin_cells";
+      if (!divides(kc))
+        throw ConfigError(key, "a bin of " + std::to_string(kc) + " cells does not fit the " +
+                                   "blocks along " + kAxis[d] + ": every block edge (cell " +
+                                   "cuts of the decomposition) must fall on a bin edge");
+    } else {
+      key = "particles.bin_cells";
+      if (h >= rc) {
+        split = rc > 0 ? std::clamp(static_cast<long long>(std::floor(h / rc)), 1LL, 64LL) : 1;
+      } else {
+        multiple = static_cast<long long>(std::ceil(rc / h));
+        while (multiple <= grid.cells[d] && (!divides(multiple) || multiple * h < rc)) ++multiple;
+        if (multiple > grid.cells[d])
+          throw ConfigError(key, std::string("no bin made of whole cells holds ") + range() +
+                                     " and fits the blocks along " + kAxis[d] +
+                                     " (cell " + fmt(h) + " m): use larger cells or fewer ranks");
+      }
+    }
+    bs[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
+    if (any && bs[d] < rc)
+      throw ConfigError(key, "the bin edge " + fmt(bs[d]) + " m along " + kAxis[d] +
+                                 " is smaller than " + range());
+    NbG[d] = split > 1 ? grid.cells[d] * split : grid.cells[d] / multiple;
+    binLo[d] = split > 1 ? dec.lo()[d] * split : dec.lo()[d] / multiple;
+    binHi[d] = split > 1 ? dec.hi()[d] * split : dec.hi()[d] / multiple;
+    if (any && periodic[d] && NbG[d] < 2)
+      throw ConfigError(key, std::string("a periodic axis needs at least 2 bins (") + kAxis[d] +
+                                 " has " + std::to_string(NbG[d]) + "): the box must be at least "
+                                 "twice " + range());
+    nb[d] = static_cast<int>(binHi[d] - binLo[d]);
+    nbx[d] = nb[d] + 2;
+    lo[d] = origin[d] + static_cast<double>(binLo[d]) * bs[d];
+    hi[d] = binHi[d] == NbG[d] ? origin[d] + L[d] : origin[d] + static_cast<double>(binHi[d]) * bs[d];
+  }
+}
+
+void DemSolver::Impl::checkTimeStep() {
+  // Rayleigh time (Hertz): pi r sqrt(rho/G) / (0.1631 nu + 0.8766), G = E/(2(1+nu))
+  // (Li, Xu & Thornton 2005); linear: collision time pi sqrt(m*/k_n) with m* = m_min/2.
+  double tLim = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < p.nOwned; ++i) {
+    const auto& m = mats[static_cast<std::size_t>(p.material[i])];
+    double t;
+    if (model == Model::HertzMindlin) {
+      const double G = m.young / (2 * (1 + m.poisson));
+      t = M_PI * p.radius[i] * std::sqrt(m.density / G) / (0.1631 * m.poisson + 0.8766);
+    } else {
+      t = M_PI * std::sqrt(0.5 * p.mass[i] / pairC[0].kn);
+    }
+    tLim = std::min(tLim, t);
+  }
+  tLim = comm.min(tLim);
+  if (!std::isfinite(tLim)) return;
+  if (dt > dtFraction * tLim) {
+    const char* what = model == Model::HertzMindlin ? "Rayleigh time" : "linear collision time";
+    throw ConfigError("particles.dt", "time step " + fmt(dt) + " s is above " + fmt(dtFraction) +
+                                          " of the " + what + " " + fmt(tLim) +
+                                          " s of the smallest particle: use at most " +
+                                          fmt(dtFraction * tLim) + " s");
+  }
+}
+
+void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
+  const std::size_t n = p.nOwned + 1;
+  resizeAll(n);
+  const std::size_t i = n - 1;
+  p.nOwned = n;
+  p.id[i] = q.id;
+  p.material[i] = q.material;
+  p.radius[i] = q.radius;
+  p.mass[i] = mats[static_cast<std::size_t>(q.material)].density * 4.0 / 3.0 * M_PI * q.radius *
+              q.radius * q.radius;
+  for (int d = 0; d < 3; ++d) {
+    p.x[d][i] = q.x[d];
+    p.v[d][i] = q.v[d];
+    p.omega[d][i] = p.f[d][i] = p.torque[d][i] = p.fExt[d][i] = 0;
+  }
+  hStart.resize(n + 1);
+  hStart[n] = hStart[n - 1];
+}
+
+void DemSolver::Impl::resizeAll(std::size_t n) {
+  p.id.resize(n);
+  p.material.resize(n);
+  p.radius.resize(n);
+  p.mass.resize(n);
+  for (int d = 0; d < 3; ++d) {
+    p.x[d].resize(n);
+    p.v[d].resize(n);
+    p.omega[d].resize(n);
+    p.f[d].resize(n);
+    p.torque[d].resize(n);
+    p.fExt[d].resize(n);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// time step
+
+void DemSolver::Impl::substep() {
+  if (frozen) {
+    time += dt;
+    ++steps;
+    return;
+  }
+  {
+    ScopedPhase t(timers, Phase::DemIntegrate);
+    initialIntegrate();
+  }
+  bool again;
+  {
+    ScopedPhase t(timers, Phase::DemNeighbor);
+    again = decideRebuild();
+  }
+  if (again) {
+    rebuild(false);
+  } else {
+    ScopedPhase t(timers, Phase::DemGhost);
+    updateGhosts();
+  }
+  {
+    ScopedPhase t(timers, Phase::DemForce);
+    computeForces(true);
+  }
+  {
+    ScopedPhase t(timers, Phase::DemIntegrate);
+    finalIntegrate();
+  }
+  time += dt;
+  ++steps;
+}
+
+void DemSolver::Impl::initialIntegrate() {
+  const std::size_t n = p.nOwned;
+  const double h = 0.5 * dt;
+  for (int d = 0; d < 3; ++d) {
+    double* x = p.x[d].data();
+    double* v = p.v[d].data();
+    const double* f = p.f[d].data();
+    const double* m = p.mass.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      v[i] += h * f[i] / m[i];
+      x[i] += dt * v[i];
+    }
+    double* w = p.omega[d].data();
+    const double* t = p.torque[d].data();
+    const double* r = p.radius.data();
+    for (std::size_t i = 0; i < n; ++i) w[i] += h * t[i] / (0.4 * m[i] * r[i] * r[i]);
+  }
+}
+
+void DemSolver::Impl::finalIntegrate() {
+  const std::size_t n = p.nOwned;
+  const double h = 0.5 * dt;
+  for (int d = 0; d < 3; ++d) {
+    double* v = p.v[d].data();
+    const double* f = p.f[d].data();
+    const double* m = p.mass.data();
+    for (std::size_t i = 0; i < n; ++i) v[i] += h * f[i] / m[i];
+    double* w = p.omega[d].data();
+    const double* t = p.torque[d].data();
+    const double* r = p.radius.data();
+    for (std::size_t i = 0; i < n; ++i) w[i] += h * t[i] / (0.4 * m[i] * r[i] * r[i]);
+  }
+}
+
+void DemSolver::Impl::checkOverlap(double globalMax) {
+  if (globalMax <= overlapLimit) return;
+  std::string msg;
+  if (maxOverlap > overlapLimit) {
+    msg = "particle " + std::to_string(maxOverlapId) + " overlaps " +
+          (maxOverlapPartner < 0 ? std::string("a wall")
+                                 : "particle " + std::to_string(maxOverlapPartner)) +
+          " by " + fmt(maxOverlap) + " of its radius at t = " + fmt(time) +
+          " s (limit particles.overlap_limit = " + fmt(overlapLimit) +
+          "): reduce particles.dt, the velocities, or stiffen the material";
+  }
+  comm.raiseIfAny(msg);
+}
+
+bool DemSolver::Impl::decideRebuild() {
+  double m2 = 0;
+  const std::size_t n = p.nOwned;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double dx = p.x[0][i] - x0[0][i], dy = p.x[1][i] - x0[1][i], dz = p.x[2][i] - x0[2][i];
+    double d2 = dx * dx + dy * dy + dz * dz;
+    if (!(d2 <= std::numeric_limits<double>::max())) d2 = std::numeric_limits<double>::max();
+    m2 = std::max(m2, d2);
+  }
+  double buf[2] = {m2, maxOverlap};
+  comm.maxInPlace(std::span<double>(buf, 2));
+  checkOverlap(buf[1]);
+  return buf[0] > 0.25 * skin * skin;
+}
+
+// ---------------------------------------------------------------------------------------------
+// rebuild: history, migration, sort, ghosts, lists
+
+void DemSolver::Impl::rebuild(bool first) {
+  {
+    ScopedPhase t(timers, Phase::DemMigrate);
+    if (!first) packHistory();
+    migrate();
+  }
+  {
+    ScopedPhase t(timers, Phase::DemNeighbor);
+    sortByBin();
+  }
+  {
+    ScopedPhase t(timers, Phase::DemGhost);
+    buildGhosts();
+  }
+  {
+    ScopedPhase t(timers, Phase::DemNeighbor);
+    buildLists();
+  }
+  if (!first) ++rebuilds;
+}
+
+void DemSolver::Impl::packHistory() {
+  const std::size_t n = p.nOwned;
+  hStart.resize(n + 1);
+  hId.clear();
+  hS.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    hStart[i] = static_cast<int>(hId.size());
+    for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
+      const double* s = &shear[3 * static_cast<std::size_t>(e)];
+      if (s[0] == 0 && s[1] == 0 && s[2] == 0) continue;
+      const int j = nbr[static_cast<std::size_t>(e)];
+      hId.push_back(j >= 0 ? p.id[static_cast<std::size_t>(j)] : j);
+      hS.insert(hS.end(), s, s + 3);
+    }
+  }
+  hStart[n] = static_cast<int>(hId.size());
+}
+
+void DemSolver::Impl::exchange(int d, int tagBase, bool sizesKnown) {
+  const int nLo = dec.neighbor(d, -1), nHi = dec.neighbor(d, +1);
+  const double t0 = comm.wtime();
+  if (!sizesKnown) {
+    rbuf[0].resize(static_cast<std::size_t>(
+        comm.exchangeCount(static_cast<int>(sbuf[0].size()), nLo, nHi, tagBase)));
+    rbuf[1].resize(static_cast<std::size_t>(
+        comm.exchangeCount(static_cast<int>(sbuf[1].size()), nHi, nLo, tagBase + 1)));
+  }
+  MPI_Request req[4];
+  req[0] = comm.irecv(std::span<double>(rbuf[0]), nHi, tagBase + 2);
+  req[1] = comm.irecv(std::span<double>(rbuf[1]), nLo, tagBase + 3);
+  req[2] = comm.isend(std::span<const double>(sbuf[0]), nLo, tagBase + 2);
+  req[3] = comm.isend(std::span<const double>(sbuf[1]), nHi, tagBase + 3);
+  Comm::waitAll(std::span<MPI_Request>(req, 4));
+  long long bytes = 0, msgs = 0;
+  const int me = dec.rank();
+  for (int s = 0; s < 2; ++s) {
+    const int to = s == 0 ? nLo : nHi;
+    if (to == MPI_PROC_NULL || to == me) continue;
+    bytes += static_cast<long long>(sbuf[static_cast<std::size_t>(s)].size() * sizeof(double));
+    msgs += sizesKnown ? 1 : 2;
+  }
+  if (msgs > 0) timers.book(Exchange::IntraPhysics, bytes, msgs, comm.wtime() - t0);
+}
+
+void DemSolver::Impl::migrate() {
+  std::string err;
+  p.nGhost = 0;
+  resizeAll(p.nOwned);
+  for (int d = 0; d < 3; ++d) {
+    sbuf[0].clear();
+    sbuf[1].clear();
+    const std::size_t n = p.nOwned;
+    std::size_t w = 0;
+    int hw = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double& x = p.x[d][i];
+      int dir = 0;
+      if (!std::isfinite(x)) {
+        if (err.empty())
+          err = "particle " + std::to_string(p.id[i]) + " has a non-finite position at t = " +
+                fmt(time) + " s";
+      } else if (periodic[d]) {
+        const double top = origin[d] + L[d];
+        if (x < origin[d]) {
+          x += L[d];
+          if (x >= top) x = origin[d];
+          dir = -1;
+        } else if (x >= top) {
+          x -= L[d];
+          if (x < origin[d]) x = origin[d];
+          dir = +1;
+        } else {
+          const long long b = gbinClamped(x, d);
+          dir = b < binLo[d] ? -1 : (b >= binHi[d] ? +1 : 0);
+        }
+      } else if (x < origin[d] || x > origin[d] + L[d]) {
+        if (err.empty())
+          err = "particle " + std::to_string(p.id[i]) + " left the box through the " +
+                (x < origin[d] ? "low " : "high ") + kAxis[d] + " face at t = " + fmt(time) +
+                " s (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
+                "): too fast for the walls, or walls are off";
+      } else {
+        const long long b = gbinClamped(x, d);
+        dir = b < binLo[d] ? -1 : (b >= binHi[d] ? +1 : 0);
+      }
+      const int h0 = hStart[i], h1 = hStart[i + 1];
+      if (dir != 0 && dec.neighbor(d, dir) == MPI_PROC_NULL) dir = 0;  // cannot happen
+      if (dir == 0) {
+        if (w != i) {
+          p.id[w] = p.id[i];
+          p.material[w] = p.material[i];
+          p.radius[w] = p.radius[i];
+          p.mass[w] = p.mass[i];
+          for (int k = 0; k < 3; ++k) {
+            p.x[k][w] = p.x[k][i];
+            p.v[k][w] = p.v[k][i];
+            p.omega[k][w] = p.omega[k][i];
+            p.f[k][w] = p.f[k][i];
+            p.torque[k][w] = p.torque[k][i];
+            p.fExt[k][w] = p.fExt[k][i];
+          }
+        }
+        hStart[w] = hw;
+        for (int e = h0; e < h1; ++e, ++hw) {
+          hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
+          for (int k = 0; k < 3; ++k)
+            hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
+                hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
+        }
+        ++w;
+      } else {
+        auto& b = sbuf[dir > 0 ? 1 : 0];
+        b.push_back(static_cast<double>(p.id[i]));
+        b.push_back(p.material[i]);
+        b.push_back(p.radius[i]);
+        b.push_back(p.mass[i]);
+        for (int k = 0; k < 3; ++k) b.push_back(p.x[k][i]);
+        for (int k = 0; k < 3; ++k) b.push_back(p.v[k][i]);
+        for (int k = 0; k < 3; ++k) b.push_back(p.omega[k][i]);
+        for (int k = 0; k < 3; ++k) b.push_back(p.fExt[k][i]);
+        b.push_back(h1 - h0);
+        for (int e = h0; e < h1; ++e) {
+          b.push_back(static_cast<double>(hId[static_cast<std::size_t>(e)]));
+          for (int k = 0; k < 3; ++k) b.push_back(hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)]);
+        }
+      }
+    }
+    p.nOwned = w;
+    hStart.resize(w + 1);
+    hStart[w] = hw;
+    hId.resize(static_cast<std::size_t>(hw));
+    hS.resize(3 * static_cast<std::size_t>(hw));
+    if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) continue;
+    exchange(d, kTagMigCount + 10 * d, false);
+    for (int s = 0; s < 2; ++s) {
+      const auto& b = rbuf[static_cast<std::size_t>(s)];
+      std::size_t q = 0;
+      while (q < b.size()) {
+        const std::size_t i = p.nOwned;
+        resizeAll(i + 1);
+        p.nOwned = i + 1;
+        p.id[i] = static_cast<std::int64_t>(b[q]);
+        p.material[i] = static_cast<int>(b[q + 1]);
+        p.radius[i] = b[q + 2];
+        p.mass[i] = b[q + 3];
+        for (int k = 0; k < 3; ++k) {
+          p.x[k][i] = b[q + 4 + k];
+          p.v[k][i] = b[q + 7 + k];
+          p.omega[k][i] = b[q + 10 + k];
+          p.fExt[k][i] = b[q + 13 + k];
+          p.f[k][i] = p.torque[k][i] = 0;
+        }
+        const int nh = static_cast<int>(b[q + 16]);
+        q += kMigFixed;
+        for (int e = 0; e < nh; ++e, q += 4) {
+          hId.push_back(static_cast<std::int64_t>(b[q]));
+          hS.insert(hS.end(), b.data() + q + 1, b.data() + q + 4);
+        }
+        hStart.push_back(static_cast<int>(hId.size()));
+      }
+    }
+  }
+  comm.raiseIfAny(err);
+}
+
+void DemSolver::Impl::sortByBin() {
+  const std::size_t n = p.nOwned;
+  const std::size_t nBins = static_cast<std::size_t>(nbx[0]) * nbx[1] * nbx[2];
+  binOf.resize(n);
+  binStart.assign(nBins + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    int b[3];
+    for (int d = 0; d < 3; ++d)
+      b[d] = static_cast<int>(std::clamp(gbinRaw(p.x[d][i], d) - binLo[d], 0LL,
+                                         static_cast<long long>(nb[d] - 1))) + 1;
+    const int lb = b[0] + nbx[0] * (b[1] + nbx[1] * b[2]);
+    binOf[i] = lb;
+    ++binStart[static_cast<std::size_t>(lb) + 1];
+  }
+  for (std::size_t b = 0; b < nBins; ++b) binStart[b + 1] += binStart[b];
+  perm.resize(n);
+  iscr.assign(binStart.begin(), binStart.end() - 1);
+  for (std::size_t i = 0; i < n; ++i)
+    perm[static_cast<std::size_t>(iscr[static_cast<std::size_t>(binOf[i])]++)] = static_cast<int>(i);
+  for (std::size_t b = 0; b < nBins; ++b) {
+    const int a = binStart[b], e = binStart[b + 1];
+    if (e - a > 1)
+      std::sort(perm.begin() + a, perm.begin() + e,
+                [this](int u, int v) { return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)]; });
+  }
+  const auto apply = [&](auto& vec, auto& scratch) {
+    scratch.resize(n);
+    for (std::size_t k = 0; k < n; ++k) scratch[k] = vec[static_cast<std::size_t>(perm[k])];
+    std::swap(vec, scratch);
+  };
+  apply(p.id, lscr);
+  apply(p.material, iscr);
+  apply(p.radius, dscr);
+  apply(p.mass, dscr);
+  for (int d = 0; d < 3; ++d) {
+    apply(p.x[d], dscr);
+    apply(p.v[d], dscr);
+    apply(p.omega[d], dscr);
+    apply(p.f[d], dscr);
+    apply(p.torque[d], dscr);
+    apply(p.fExt[d], dscr);
+  }
+  // history rows follow their particles
+  hStart2.resize(n + 1);
+  hId2.clear();
+  hS2.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(perm[k]);
+    hStart2[k] = static_cast<int>(hId2.size());
+    for (int e = hStart[i]; e < hStart[i + 1]; ++e) {
+      hId2.push_back(hId[static_cast<std::size_t>(e)]);
+      hS2.insert(hS2.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
+    }
+  }
+  hStart2[n] = static_cast<int>(hId2.size());
+  std::swap(hStart, hStart2);
+  std::swap(hId, hId2);
+  std::swap(hS, hS2);
+  for (int d = 0; d < 3; ++d) x0[d].assign(p.x[d].begin(), p.x[d].begin() + static_cast<std::ptrdiff_t>(n));
+}
+
+void DemSolver::Impl::buildGhosts() {
+  const Int3 coords = dec.coords(), dims = dec.dims();
+  for (int d = 0; d < 3; ++d) {
+    const std::size_t nBefore = p.size();
+    for (int s = 0; s < 2; ++s) {
+      auto& sw = swaps[d][static_cast<std::size_t>(s)];
+      auto& b = sbuf[static_cast<std::size_t>(s)];
+      sw.send.clear();
+      b.clear();
+      sw.shift = 0;
+      if (dec.neighbor(d, s == 0 ? -1 : 1) == MPI_PROC_NULL) continue;
+      if (periodic[d]) {
+        if (s == 0 && coords[d] == 0) sw.shift = L[d];
+        if (s == 1 && coords[d] == dims[d] - 1) sw.shift = -L[d];
+      }
+      const double* x = p.x[d].data();
+      const double lim = s == 0 ? lo[d] + rc : hi[d] - rc;
+      for (std::size_t i = 0; i < nBefore; ++i) {
+        if (s == 0 ? x[i] < lim : x[i] >= lim) {
+          sw.send.push_back(static_cast<int>(i));
+          b.push_back(static_cast<double>(p.id[i]));
+          b.push_back(p.material[i]);
+          b.push_back(p.radius[i]);
+          b.push_back(p.mass[i]);
+          for (int k = 0; k < 3; ++k) b.push_back(p.x[k][i] + (k == d ? sw.shift : 0.0));
+          for (int k = 0; k < 3; ++k) b.push_back(p.v[k][i]);
+          for (int k = 0; k < 3; ++k) b.push_back(p.omega[k][i]);
+        }
+      }
+    }
+    if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) {
+      for (int s = 0; s < 2; ++s) swaps[d][static_cast<std::size_t>(s)].recvCount = 0;
+      continue;
+    }
+    exchange(d, kTagGhostCount + 10 * d, false);
+    for (int s = 0; s < 2; ++s) {
+      const auto& b = rbuf[static_cast<std::size_t>(s)];
+      const std::size_t cnt = b.size() / kGhostBuild;
+      const std::size_t start = p.size();
+      auto& sw = swaps[d][static_cast<std::size_t>(s)];
+      sw.recvStart = static_cast<int>(start);
+      sw.recvCount = static_cast<int>(cnt);
+      resizeAll(start + cnt);
+      p.nGhost += cnt;
+      for (std::size_t q = 0; q < cnt; ++q) {
+        const double* r = &b[q * kGhostBuild];
+        const std::size_t i = start + q;
+        p.id[i] = static_cast<std::int64_t>(r[0]);
+        p.material[i] = static_cast<int>(r[1]);
+        p.radius[i] = r[2];
+        p.mass[i] = r[3];
+        for (int k = 0; k < 3; ++k) {
+          p.x[k][i] = r[4 + k];
+          p.v[k][i] = r[7 + k];
+          p.omega[k][i] = r[10 + k];
+          p.f[k][i] = p.torque[k][i] = p.fExt[k][i] = 0;
+        }
+      }
+    }
+  }
+}
+
+void DemSolver::Impl::updateGhosts() {
+  for (int d = 0; d < 3; ++d) {
+    if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) continue;
+    for (int s = 0; s < 2; ++s) {
+      const auto& sw = swaps[d][static_cast<std::size_t>(s)];
+      auto& b = sbuf[static_cast<std::size_t>(s)];
+      b.resize(sw.send.size() * kGhostUpdate);
+      double* o = b.data();
+      for (const int i : sw.send) {
+        const auto u = static_cast<std::size_t>(i);
+        for (int k = 0; k < 3; ++k) o[k] = p.x[k][u] + (k == d ? sw.shift : 0.0);
+        for (int k = 0; k < 3; ++k) o[3 + k] = p.v[k][u];
+        for (int k = 0; k < 3; ++k) o[6 + k] = p.omega[k][u];
+        o += kGhostUpdate;
+      }
+      rbuf[static_cast<std::size_t>(s)].resize(static_cast<std::size_t>(sw.recvCount) * kGhostUpdate);
+    }
+    exchange(d, kTagUpdate + 10 * d, true);
+    for (int s = 0; s < 2; ++s) {
+      const auto& sw = swaps[d][static_cast<std::size_t>(s)];
+      const double* r = rbuf[static_cast<std::size_t>(s)].data();
+      for (int q = 0; q < sw.recvCount; ++q, r += kGhostUpdate) {
+        const auto i = static_cast<std::size_t>(sw.recvStart + q);
+        for (int k = 0; k < 3; ++k) {
+          p.x[k][i] = r[k];
+          p.v[k][i] = r[3 + k];
+          p.omega[k][i] = r[6 + k];
+        }
+      }
+    }
+  }
+}
+
+void DemSolver::Impl::buildLists() {
+  const std::size_t nAll = p.size(), n = p.nOwned;
+  const std::size_t nBins = static_cast<std::size_t>(nbx[0]) * nbx[1] * nbx[2];
+  // bins of every local particle (owned clamped into the block, ghosts into the ghost layer)
+  binOf.resize(nAll);
+  binStart.assign(nBins + 1, 0);
+  for (std::size_t i = 0; i < nAll; ++i) {
+    const bool own = i < n;
+    int b[3];
+    for (int d = 0; d < 3; ++d) {
+      const long long lb = gbinRaw(p.x[d][i], d) - binLo[d];
+      b[d] = static_cast<int>(own ? std::clamp(lb, 0LL, static_cast<long long>(nb[d] - 1))
+                                  : std::clamp(lb, -1LL, static_cast<long long>(nb[d]))) + 1;
+    }
+    binOf[i] = b[0] + nbx[0] * (b[1] + nbx[1] * b[2]);
+    ++binStart[static_cast<std::size_t>(binOf[i]) + 1];
+  }
+  for (std::size_t b = 0; b < nBins; ++b) binStart[b + 1] += binStart[b];
+  binItems.resize(nAll);
+  iscr.assign(binStart.begin(), binStart.end() - 1);
+  for (std::size_t i = 0; i < nAll; ++i)
+    binItems[static_cast<std::size_t>(iscr[static_cast<std::size_t>(binOf[i])]++)] = static_cast<int>(i);
+  for (std::size_t b = 0; b < nBins; ++b) {
+    const int a = binStart[b], e = binStart[b + 1];
+    if (e - a > 1 && binItems[static_cast<std::size_t>(e - 1)] >= static_cast<int>(n))
+      std::sort(binItems.begin() + a, binItems.begin() + e, [this](int u, int v) {
+        return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)];
+      });
+  }
+  // full Verlet list of owned rows: stencil bins in fixed order, partners by id inside a bin
+  rowStart.resize(n + 1);
+  nbr.clear();
+  shear.clear();
+  const int sy = nbx[0], sz = nbx[0] * nbx[1];
+  const double* X = p.x[0].data();
+  const double* Y = p.x[1].data();
+  const double* Z = p.x[2].data();
+  const double* R = p.radius.data();
+  const auto lookup = [&](std::size_t i, std::int64_t partner) {
+    for (int e = hStart[i]; e < hStart[i + 1]; ++e)
+      if (hId[static_cast<std::size_t>(e)] == partner) {
+        shear.insert(shear.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
+        return;
+      }
+    shear.insert(shear.end(), 3, 0.0);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    rowStart[i] = static_cast<int>(nbr.size());
+    const int bi = binOf[i];
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto b = static_cast<std::size_t>(bi + dx + dy * sy + dz * sz);
+          for (int q = binStart[b]; q < binStart[b + 1]; ++q) {
+            const int j = binItems[static_cast<std::size_t>(q)];
+            if (static_cast<std::size_t>(j) == i) continue;
+            const auto u = static_cast<std::size_t>(j);
+            const double ex = X[i] - X[u], ey = Y[i] - Y[u], ez = Z[i] - Z[u];
+            const double cut = R[i] + R[u] + skin;
+            if (ex * ex + ey * ey + ez * ez < cut * cut) {
+              nbr.push_back(j);
+              lookup(i, p.id[u]);
+            }
+          }
+        }
+    for (int d = 0; d < 3; ++d)
+      for (int s = 0; s < 2; ++s) {
+        if (!wallOn[d][static_cast<std::size_t>(s)]) continue;
+        const double dist = s == 0 ? p.x[d][i] - origin[d] : origin[d] + L[d] - p.x[d][i];
+        if (dist < R[i] + skin) {
+          const int code = -1 - (2 * d + s);
+          nbr.push_back(code);
+          lookup(i, code);
+        }
+      }
+  }
+  rowStart[n] = static_cast<int>(nbr.size());
+}
+
+// ---------------------------------------------------------------------------------------------
+// forces
+
+void DemSolver::Impl::computeForces(bool update) {
+  if (model == Model::HertzMindlin)
+    forces<Model::HertzMindlin>(update);
+  else
+    forces<Model::Linear>(update);
+}
+
+template <Model M>
+void DemSolver::Impl::forces(bool update) {
+  const std::size_t n = p.nOwned;
+  const double* X[3] = {p.x[0].data(), p.x[1].data(), p.x[2].data()};
+  const double* V[3] = {p.v[0].data(), p.v[1].data(), p.v[2].data()};
+  const double* W[3] = {p.omega[0].data(), p.omega[1].data(), p.omega[2].data()};
+  const double* R = p.radius.data();
+  const double* Ms = p.mass.data();
+  const int* mat = p.material.data();
+  long long nc = 0, nw = 0;
+  double worst = 0;
+  std::int64_t worstId = -1, worstPartner = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ri = R[i], mi = Ms[i];
+    double F[3] = {mi * g[0] + p.fExt[0][i], mi * g[1] + p.fExt[1][i], mi * g[2] + p.fExt[2][i]};
+    double T[3] = {0, 0, 0};
+    const double xi[3] = {X[0][i], X[1][i], X[2][i]};
+    const double vi[3] = {V[0][i], V[1][i], V[2][i]};
+    const double wi[3] = {W[0][i], W[1][i], W[2][i]};
+    const PairCoeff* rowC = &pairC[static_cast<std::size_t>(mat[i] * nMat)];
+    for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
+      const int j = nbr[static_cast<std::size_t>(e)];
+      double* sh = &shear[3 * static_cast<std::size_t>(e)];
+      if (j >= 0) {
+        const auto u = static_cast<std::size_t>(j);
+        const double dx[3] = {xi[0] - X[0][u], xi[1] - X[1][u], xi[2] - X[2][u]};
+        const double r2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
+        const double rj = R[u], rs = ri + rj;
+        if (r2 >= rs * rs) {
+          sh[0] = sh[1] = sh[2] = 0;
+          continue;
+        }
+        const double r = std::sqrt(r2);
+        const double inv = 1.0 / r;
+        const double nrm[3] = {dx[0] * inv, dx[1] * inv, dx[2] * inv};
+        const double delta = rs - r;
+        const double Reff = ri * rj / rs;
+        const double mj = Ms[u];
+        const double meff = mi * mj / (mi + mj);
+        const double vr[3] = {vi[0] - V[0][u], vi[1] - V[1][u], vi[2] - V[2][u]};
+        const double ws[3] = {ri * wi[0] + rj * W[0][u], ri * wi[1] + rj * W[1][u],
+                              ri * wi[2] + rj * W[2][u]};
+        const double wr[3] = {wi[0] - W[0][u], wi[1] - W[1][u], wi[2] - W[2][u]};
+        detail::contactForce<M>(rowC[mat[u]], dt, update, nrm, delta, Reff, meff, ri, vr, ws, wr,
+                                sh, F, T);
+        ++nc;
+        const double ov = delta / std::min(ri, rj);
+        if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = p.id[u];
+      } else {
+        const int w = -1 - j, d = w / 2, s = w % 2;
+        const double dist = s == 0 ? xi[d] - origin[d] : origin[d] + L[d] - xi[d];
+        const double delta = ri - dist;
+        if (delta <= 0) {
+          sh[0] = sh[1] = sh[2] = 0;
+          continue;
+        }
+        double nrm[3] = {0, 0, 0};
+        nrm[d] = s == 0 ? 1.0 : -1.0;
+        const double ws[3] = {ri * wi[0], ri * wi[1], ri * wi[2]};
+        detail::contactForce<M>(wallC[static_cast<std::size_t>(mat[i])], dt, update, nrm, delta,
+                                ri, mi, ri, vi, ws, wi, sh, F, T);
+        ++nw;
+        const double ov = delta / ri;
+        if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = -1;
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      p.f[k][i] = F[k];
+      p.torque[k][i] = T[k];
+    }
+  }
+  contacts = nc;
+  wallContacts = nw;
+  maxOverlap = worst;
+  maxOverlapId = worstId;
+  maxOverlapPartner = worstPartner;
+}
+
+std::size_t DemSolver::Impl::memory() const {
+  std::size_t b = cap(p.id) + cap(p.material) + cap(p.radius) + cap(p.mass);
+  for (int d = 0; d < 3; ++d)
+    b += cap(p.x[d]) + cap(p.v[d]) + cap(p.omega[d]) + cap(p.f[d]) + cap(p.torque[d]) +
+         cap(p.fExt[d]) + cap(x0[d]);
+  b += cap(binOf) + cap(binStart) + cap(binItems) + cap(rowStart) + cap(nbr) + cap(shear);
+  b += cap(hStart) + cap(hStart2) + cap(hId) + cap(hId2) + cap(hS) + cap(hS2);
+  for (const auto& a : swaps)
+    for (const auto& s : a) b += cap(s.send);
+  b += cap(sbuf[0]) + cap(sbuf[1]) + cap(rbuf[0]) + cap(rbuf[1]);
+  b += cap(perm) + cap(iscr) + cap(dscr) + cap(lscr);
+  return b;
+}
+
+// ---------------------------------------------------------------------------------------------
+// public interface
+
+DemSolver::DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers)
+    : impl_(std::make_unique<Impl>(dec, cfg, timers)) {}
+DemSolver::~DemSolver() = default;
+ParticleStore& DemSolver::particles() { return impl_->p; }
+const ParticleStore& DemSolver::particles() const { return impl_->p; }
+void DemSolver::substep() { impl_->substep(); }
+double DemSolver::dt() const { return impl_->dt; }
+double DemSolver::time() const { return impl_->time; }
+void DemSolver::setFrozen(bool frozen) { impl_->frozen = frozen; }
+long long DemSolver::globalCount() const {
+  return impl_->comm.sum(static_cast<long long>(impl_->p.nOwned));
+}
+void DemSolver::rebuildNow() { impl_->rebuild(false); }
+void DemSolver::computeForcesNow() {
+  ScopedPhase t(impl_->timers, Phase::DemForce);
+  impl_->computeForces(false);
+}
+double DemSolver::interactionRange() const { return impl_->rc; }
+double DemSolver::skin() const { return impl_->skin; }
+std::array<double, 3> DemSolver::binSize() const { return impl_->bs; }
+long long DemSolver::rebuildCount() const { return impl_->rebuilds; }
+std::size_t DemSolver::memoryBytes() const { return impl_->memory(); }
+long long DemSolver::localContacts() const { return impl_->contacts; }
+long long DemSolver::localWallContacts() const { return impl_->wallContacts; }
+
+double DemSolver::contactEnergy() const {
+  const auto& m = *impl_;
+  const auto& p = m.p;
+  double e = 0;
+  for (std::size_t i = 0; i < p.nOwned; ++i) {
+    for (int k = m.rowStart[i]; k < m.rowStart[i + 1]; ++k) {
+      const int j = m.nbr[static_cast<std::size_t>(k)];
+      if (j >= 0) {
+        const auto u = static_cast<std::size_t>(j);
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r2 += (p.x[d][i] - p.x[d][u]) * (p.x[d][i] - p.x[d][u]);
+        const double rs = p.radius[i] + p.radius[u];
+        if (r2 >= rs * rs) continue;
+        const auto& c = m.pairC[static_cast<std::size_t>(p.material[i] * m.nMat + p.material[u])];
+        e += 0.5 * detail::normalEnergy(m.model, c, rs - std::sqrt(r2),
+                                        p.radius[i] * p.radius[u] / rs);
+      } else {
+        const int w = -1 - j, d = w / 2, s = w % 2;
+        const double dist = s == 0 ? p.x[d][i] - m.origin[d] : m.origin[d] + m.L[d] - p.x[d][i];
+        const double delta = p.radius[i] - dist;
+        if (delta > 0)
+          e += detail::normalEnergy(m.model, m.wallC[static_cast<std::size_t>(p.material[i])],
+                                    delta, p.radius[i]);
+      }
+    }
+  }
+  return m.comm.sum(e);
+}
+
+Json DemSolver::diagnostics() const {
+  const auto& m = *impl_;
+  double loc[6] = {static_cast<double>(m.p.nOwned), static_cast<double>(m.contacts),
+                   static_cast<double>(m.wallContacts), static_cast<double>(m.p.nGhost),
+                   static_cast<double>(m.nbr.size()), static_cast<double>(m.memory())};
+  m.comm.sumInPlace(std::span<double>(loc, 6));
+  const double n = std::max(1.0, loc[0]);
+  Json j;
+  j["count"] = static_cast<long long>(loc[0]);
+  j["contacts_per_particle"] = loc[1] / n;
+  j["wall_contacts"] = static_cast<long long>(loc[2]);
+  j["ghosts"] = static_cast<long long>(loc[3]);
+  j["neighbors_per_particle"] = loc[4] / n;
+  j["rebuilds"] = m.rebuilds;
+  j["bytes_per_particle"] = loc[5] / n;
+  j["interaction_range"] = m.rc;
+  j["skin"] = m.skin;
+  j["bin_size"] = {m.bs[0], m.bs[1], m.bs[2]};
+  j["dt"] = m.dt;
+  j["frozen"] = m.frozen;
+  return j;
+}
+
+}  // namespace coloc::dem
