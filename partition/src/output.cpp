@@ -1,0 +1,154 @@
+#include "coloc/partition/output.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "coloc/core/error.hpp"
+#include "coloc/core/report.hpp"
+
+namespace coloc {
+
+void declareOutputConfig(Schema& s) {
+  s.integer("output.interval_steps", 0,
+            "write fields and particles every this many steps (0: no periodic output)",
+            Range::nonNegative());
+  s.boolean("output.fields", true, "write the fluid fields (DIR/fields_NNNNNN.h5, fields.xmf)");
+  s.boolean("output.particles", true,
+            "write the particles (DIR/particles_NNNNNN.h5, particles.xmf)");
+  s.string("output.dir", "", "folder of the HDF5/XDMF output (empty: the run's --out folder)");
+}
+
+OutputOptions outputOptionsFromConfig(const Config& cfg, const std::string& runOutDir) {
+  OutputOptions o;
+  o.intervalSteps = cfg.integer("output.interval_steps");
+  o.fields = cfg.boolean("output.fields");
+  o.particles = cfg.boolean("output.particles");
+  o.dir = cfg.string("output.dir");
+  if (o.dir.empty()) o.dir = runOutDir.empty() ? "." : runOutDir;
+  return o;
+}
+
+OutputWriter::OutputWriter(const Decomposition& dec, OutputOptions opt)
+    : dec_(&dec),
+      opt_(std::move(opt)),
+      fieldSeries_(XdmfSeries::cells("fields", dec.grid())),
+      particleSeries_(XdmfSeries::particles("particles")) {
+  if (opt_.dir.empty()) opt_.dir.push_back('.');
+  if (opt_.intervalSteps > 0 && (opt_.fields || opt_.particles)) ensureDir();
+}
+
+bool OutputWriter::due(long long step) const {
+  return opt_.intervalSteps > 0 && step % opt_.intervalSteps == 0;
+}
+
+std::string OutputWriter::fileName(const std::string& series, long long step) {
+  char b[64];
+  std::snprintf(b, sizeof b, "_%06lld.h5", step);
+  return series + b;
+}
+
+void OutputWriter::ensureDir() {
+  if (dirReady_) return;
+  std::string err;
+  if (dec_->comm().isRoot()) {
+    try {
+      makeDirectories(opt_.dir);
+    } catch (const std::exception& e) {
+      err = std::string("output directory: ") + e.what();
+    }
+  }
+  dec_->comm().raiseIfAny(err);
+  dirReady_ = true;
+}
+
+std::string OutputWriter::writeFields(long long step, double time,
+                                      const std::vector<OutputField>& fields) {
+  if (!opt_.fields) return {};
+  std::set<std::string> names;
+  for (const auto& f : fields) {
+    if (f.name.empty() || f.name.find('/') != std::string::npos || !names.insert(f.name).second)
+      throw Error("output field name '" + f.name + "': must be non-empty, unique, without '/'");
+    if (!f.c[0] || (f.isVector() && !f.c[2]))
+      throw Error("output field '" + f.name + "': missing component");
+  }
+  ensureDir();
+  const Decomposition& dec = *dec_;
+  const std::string name = fileName("fields", step);
+  const std::string path = (std::filesystem::path(opt_.dir) / name).string();
+  XdmfStep entry;
+  entry.time = time;
+  entry.step = step;
+  entry.file = name;
+  {
+    H5File file = H5File::create(dec.comm(), path);
+    file.setAttribute("/", "time", time);
+    file.setAttribute("/", "step", step);
+    const auto& g = dec.grid();
+    const double cells[3] = {double(g.cells[0]), double(g.cells[1]), double(g.cells[2])};
+    const double spacing[3] = {g.spacing(0), g.spacing(1), g.spacing(2)};
+    file.setAttribute("/", "origin", std::span<const double>(g.origin));
+    file.setAttribute("/", "spacing", std::span<const double>(spacing));
+    file.setAttribute("/", "cells", std::span<const double>(cells));
+    for (const auto& f : fields) {
+      const std::string ds = "/" + f.name;
+      if (f.isVector())
+        writeCellVector(file, ds, dec, *f.c[0], *f.c[1], *f.c[2]);
+      else
+        writeCellField(file, ds, dec, *f.c[0]);
+      entry.attributes.push_back({f.name, f.isVector(), ds});
+    }
+    file.close();
+  }
+  fieldSeries_.add(std::move(entry));
+  fieldSeries_.write(dec.comm(), (std::filesystem::path(opt_.dir) / "fields.xmf").string());
+  return path;
+}
+
+std::string OutputWriter::writeParticles(long long step, double time,
+                                         std::span<const std::int64_t> id, Vec3Span x, Vec3Span v,
+                                         Vec3Span omega, std::span<const double> radius) {
+  if (!opt_.particles) return {};
+  const Decomposition& dec = *dec_;
+  const std::size_t n = id.size();
+  std::string err;
+  for (const Vec3Span* a : {&x, &v, &omega})
+    for (const auto& c : *a)
+      if (c.size() != n) err = "particle output: arrays of different lengths";
+  if (radius.size() != n) err = "particle output: arrays of different lengths";
+  dec.comm().raiseIfAny(err);
+  ensureDir();
+  const std::string name = fileName("particles", step);
+  const std::string path = (std::filesystem::path(opt_.dir) / name).string();
+  XdmfStep entry;
+  entry.time = time;
+  entry.step = step;
+  entry.file = name;
+  entry.geometry = "/x";
+  {
+    H5File file = H5File::create(dec.comm(), path);
+    const long long total = dec.comm().sum(static_cast<long long>(n));
+    entry.count = total;
+    file.setAttribute("/", "time", time);
+    file.setAttribute("/", "step", step);
+    file.setAttribute("/", "count", total);
+    writeParticleArray(file, "/id", id);
+    writeParticleVec3(file, "/x", x);
+    writeParticleVec3(file, "/v", v);
+    writeParticleVec3(file, "/omega", omega);
+    writeParticleArray(file, "/radius", radius);
+    const std::vector<int> rank(n, dec.rank());
+    writeParticleArray(file, "/rank", std::span<const int>(rank));
+    file.close();
+  }
+  entry.attributes = {{"id", false, "/id", "Int", 8},
+                      {"v", true, "/v"},
+                      {"omega", true, "/omega"},
+                      {"radius", false, "/radius"},
+                      {"rank", false, "/rank", "Int", 4}};
+  particleSeries_.add(std::move(entry));
+  particleSeries_.write(dec.comm(), (std::filesystem::path(opt_.dir) / "particles.xmf").string());
+  return path;
+}
+
+}  // namespace coloc
