@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <memory>
+#include <span>
+#include <vector>
 #include <string>
 
 #include "coloc/core/run_config.hpp"
@@ -24,17 +26,17 @@ inline coloc::Config config(const std::string& text) {
 }
 
 /// A solver with its decomposition and timers (the decomposition must outlive the solver).
-struct Run {
+struct Case {
   coloc::Config cfg;
   coloc::Decomposition dec;
   coloc::Timers timers;
   std::unique_ptr<coloc::dem::DemSolver> dem;
-  Run(const std::string& text, const coloc::Comm& comm = coloc::Comm::world())
+  Case(const std::string& text, const coloc::Comm& comm = coloc::Comm::world())
       : cfg(config(text)), dec(coloc::decompositionFromConfig(comm, cfg)) {
     dem = std::make_unique<coloc::dem::DemSolver>(dec, cfg, timers);
   }
   /// Same case on an explicit process grid of `comm` (serial references use MPI_COMM_SELF).
-  Run(const std::string& text, const coloc::Comm& comm, coloc::Int3 dims)
+  Case(const std::string& text, const coloc::Comm& comm, coloc::Int3 dims)
       : cfg(config(text)),
         dec(coloc::Decomposition::uniform(comm, coloc::gridFromConfig(cfg), dims)) {
     dem = std::make_unique<coloc::dem::DemSolver>(dec, cfg, timers);
@@ -59,5 +61,28 @@ struct Run {
     return dec.comm().sum(e);
   }
 };
+
+}  // namespace demtest
+
+namespace demtest {
+
+/// Per-id table over all ranks: [count, x, y, z, vx, vy, vz, wx, wy, wz] for ids 0..n-1.
+/// Collective over the run's communicator (a serial reference on MPI_COMM_SELF sums nothing).
+inline std::vector<double> table(Case& r, long n) {
+  std::vector<double> t(static_cast<std::size_t>(10 * n), 0.0);
+  auto& s = r.p();
+  for (std::size_t i = 0; i < s.nOwned; ++i) {
+    const auto k = static_cast<std::size_t>(10 * s.id[i]);
+    if (s.id[i] < 0 || s.id[i] >= n) continue;
+    t[k] += 1;
+    for (int d = 0; d < 3; ++d) {
+      t[k + 1 + d] = s.x[d][i];
+      t[k + 4 + d] = s.v[d][i];
+      t[k + 7 + d] = s.omega[d][i];
+    }
+  }
+  r.dec.comm().sumInPlace(std::span<double>(t));
+  return t;
+}
 
 }  // namespace demtest

@@ -41,7 +41,7 @@ Impact collide(bool wall, double e, const std::string& model = "hertz_mindlin") 
   else
     c << "\"positions\": [0.0895, 0.1, 0.1, 0.1105, 0.1, 0.1], \"radius\": " << kR
       << ", \"velocities\": [" << 0.5 * kV << ", 0, 0, " << -0.5 * kV << ", 0, 0]}]}}";
-  demtest::Run run(c.str());
+  demtest::Case run(c.str());
   auto& p = run.p();
   // gap(t): surface distance; contact while gap < 0. Crossing times by linear interpolation.
   const auto gap = [&] {
@@ -121,7 +121,7 @@ TEST(DemContact, SlidingSphereRolls) {
     << "\"cells\": [10, 2, 2]}, \"particles\": {\"dt\": " << dt << ", \"materials\": ["
     << material(0.5, mu) << "], \"sources\": [{\"type\": \"list\", \"positions\": [0.02, 0.02, "
     << r - delta << "], \"radius\": " << r << "}]}}";
-  demtest::Run run(c.str());
+  demtest::Case run(c.str());
   auto& p = run.p();
   for (int s = 0; s < 2500; ++s) run.dem->substep();  // settle on the floor (damped, e = 0.5)
   ASSERT_LT(std::fabs(p.v[2][0]), 1e-6);
