@@ -1,0 +1,66 @@
+// The "fluid.*" keys of the case file (see docs/fv.md for the meaning of each choice).
+#include "coloc/fv/fluid.hpp"
+
+namespace coloc::fv {
+
+namespace {
+std::map<std::string, Schema> boundaryTypes() {
+  std::map<std::string, Schema> t;
+  t["auto"] = Schema();
+  t["periodic"] = Schema();
+  Schema inlet;
+  inlet.vec3("velocity", std::nullopt, "inlet velocity vector (m/s)");
+  t["inlet"] = inlet;
+  Schema outlet;
+  outlet.number("pressure", 0.0, "outlet kinematic pressure p/rho_f (m^2/s^2)");
+  t["outlet"] = outlet;
+  Schema wall;
+  wall.vec3("velocity", std::array<double, 3>{0, 0, 0},
+            "tangential wall velocity (m/s), e.g. a moving lid; the normal component must be 0");
+  t["wall"] = wall;
+  t["slip"] = Schema();
+  return t;
+}
+}  // namespace
+
+void declareConfig(Schema& s) {
+  s.number("fluid.nu", 1.0e-6, "kinematic viscosity (m^2/s)", Range::positive());
+  s.number("fluid.rho", 1000.0, "fluid density (kg/m^3)", Range::positive());
+  s.vec3("fluid.body_force", std::array<double, 3>{0, 0, 0},
+         "body acceleration on the fluid (m/s^2), added to the top-level gravity; e.g. the "
+         "driving pressure gradient of a periodic channel");
+  s.vec3("fluid.initial_velocity", std::array<double, 3>{0, 0, 0}, "initial velocity (m/s)");
+  const char* faces[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
+  for (const char* f : faces)
+    s.variant(std::string("fluid.boundary.") + f, boundaryTypes(), "auto",
+              std::string("condition on the ") + f +
+                  " face: auto (periodic on a periodic axis, else no-slip wall), periodic, "
+                  "inlet{velocity}, outlet{pressure}, wall{velocity}, slip");
+  s.number("fluid.dt", 1.0e-3,
+           "time step (s); with fluid.adaptive_dt the first and the largest step",
+           Range::positive());
+  s.boolean("fluid.adaptive_dt", false,
+            "adapt dt to fluid.cfl and the explicit-viscous limit every step");
+  s.number("fluid.cfl", 0.5, "target convective CFL number of the adaptive step",
+           Range::openClosed(0.0, 10.0));
+  s.number("fluid.cfl_max", 1.0,
+           "hard limit: a step whose CFL exceeds it stops the run with an error",
+           Range::positive());
+  s.string("fluid.convection", "tvd",
+           "convection of the eps-weighted momentum: central (2nd order) or tvd (bounded, "
+           "limiter fluid.limiter)",
+           {"central", "tvd"});
+  s.string("fluid.limiter", "van_leer", "TVD limiter", {"van_leer", "minmod"});
+  s.string("fluid.time_scheme", "ab2",
+           "explicit terms: ab2 (Adams-Bashforth 2, variable step) or euler (1st order)",
+           {"ab2", "euler"});
+  s.string("fluid.pressure.solver", "pfmg", "preconditioner of hypre Struct PCG", {"pfmg", "smg"});
+  s.number("fluid.pressure.tol", 1.0e-8, "relative residual tolerance (2-norm) of PCG",
+           Range::openClosed(0.0, 1.0));
+  s.integer("fluid.pressure.max_iter", 200, "PCG iteration cap", Range::atLeast(1));
+  s.number("fluid.steady_tol", 0.0,
+           "steady-state stop: max|u^{n+1}-u^n| / max|u| below this ends a fluid-only run (0: off)",
+           Range::nonNegative());
+}
+
+}  // namespace coloc::fv

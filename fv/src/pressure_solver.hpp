@@ -1,0 +1,62 @@
+// fv/src/pressure_solver.hpp — the pressure equation on hypre's Struct interface (private).
+//
+// One 7-point Struct matrix over the global cell grid (periodic axes passed to
+// HYPRE_StructGridSetPeriodic), one right-hand side and one solution vector, PCG preconditioned
+// by one V-cycle of PFMG (default: symmetric red-black Gauss-Seidel, one pre- and one
+// post-smoothing sweep, Galerkin coarse operators) or of SMG. Grid, stencil, matrix and vectors
+// are created once; setMatrix() refreshes the values and redoes the (unavoidable) multigrid
+// setup, which the fluid calls only when eps, K or -- with drag -- dt changed.
+//
+// Stencil entry order per cell: 0 centre, 1 -x, 2 +x, 3 -y, 4 +y, 5 -z, 6 +z; values are laid
+// out entry fastest, then x, y, z over this rank's block (hypre's SetBoxValues order).
+#pragma once
+
+#include <HYPRE_struct_ls.h>
+
+#include <span>
+#include <string>
+
+#include "coloc/partition/decomposition.hpp"
+
+namespace coloc::fv {
+
+class PressureSolver {
+ public:
+  enum class Kind { Pfmg, Smg };
+  PressureSolver(const Decomposition& dec, Kind kind, double tol, int maxIter);
+  ~PressureSolver();
+  PressureSolver(const PressureSolver&) = delete;
+  PressureSolver& operator=(const PressureSolver&) = delete;
+
+  /// New matrix values (7 per owned cell, see above); rebuilds the preconditioner.
+  void setMatrix(std::span<double> values);
+  /// Solve A x = b to ||r||_2 <= tol max(||b||_2, scale): `scale` is the norm of the flux scale
+  /// of the right-hand side (so a right-hand side that is only round-off does not ask PCG for
+  /// round-off digits). `x` holds the initial guess on entry and the solution on exit (owned
+  /// cells, x fastest). Returns the PCG iteration count.
+  int solve(std::span<double> b, std::span<double> x, double scale);
+  double lastResidualNorm() const { return lastResidualNorm_; }
+  double lastRelativeResidual() const { return lastResidual_; }
+  int setups() const { return setups_; }
+
+ private:
+  void destroySolver();
+  MPI_Comm comm_;
+  Kind kind_;
+  double tol_;
+  int maxIter_;
+  HYPRE_Int ilower_[3], iupper_[3];
+  HYPRE_StructGrid grid_ = nullptr;
+  HYPRE_StructStencil stencil_ = nullptr;
+  HYPRE_StructMatrix A_ = nullptr;
+  HYPRE_StructVector b_ = nullptr, x_ = nullptr;
+  HYPRE_StructSolver pcg_ = nullptr, precond_ = nullptr;
+  bool ready_ = false;
+  double lastResidual_ = 0, lastResidualNorm_ = 0;
+  int setups_ = 0;
+};
+
+/// HYPRE_Init() once per process (after MPI_Init); called by the first FluidSolver.
+void ensureHypreInitialized();
+
+}  // namespace coloc::fv
