@@ -367,8 +367,8 @@ void DemSolver::Impl::resizeAll(std::size_t n) {
 
 void DemSolver::Impl::substep() {
   if (frozen) {
-    time += dt;
     ++steps;
+    time = static_cast<double>(steps) * dt;  // no accumulated round-off
     return;
   }
   {
@@ -394,8 +394,8 @@ void DemSolver::Impl::substep() {
     ScopedPhase t(timers, Phase::DemIntegrate);
     finalIntegrate();
   }
-  time += dt;
   ++steps;
+  time = static_cast<double>(steps) * dt;
 }
 
 void DemSolver::Impl::initialIntegrate() {
