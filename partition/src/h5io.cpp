@@ -486,6 +486,7 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
   f.writePath_ = path + ".tmp";
   f.writable_ = true;
   f.sync_ = sync;
+  f.root_ = comm.isRoot();
   hid_t id = -1;
   const FlatComm flat(comm.raw());
   collective(comm, path, [&] {
@@ -503,6 +504,7 @@ H5File H5File::openRead(const Comm& comm, const std::string& path) {
   H5File f;
   f.comm_ = comm;
   f.path_ = f.writePath_ = path;
+  f.root_ = comm.isRoot();
   hid_t id = -1;
   collective(comm, path, [&] {
     if (!std::filesystem::exists(path)) throw LocalFailure("no such file");
@@ -523,7 +525,8 @@ H5File::H5File(H5File&& o) noexcept
       path_(std::move(o.path_)),
       writePath_(std::move(o.writePath_)),
       writable_(o.writable_),
-      sync_(o.sync_) {}
+      sync_(o.sync_),
+      root_(o.root_) {}
 
 H5File& H5File::operator=(H5File&& o) noexcept {
   if (this != &o) {
@@ -534,6 +537,7 @@ H5File& H5File::operator=(H5File&& o) noexcept {
     writePath_ = std::move(o.writePath_);
     writable_ = o.writable_;
     sync_ = o.sync_;
+    root_ = o.root_;
   }
   return *this;
 }
@@ -544,7 +548,7 @@ void H5File::release() noexcept {
   if (id_ < 0) return;
   H5Fclose(static_cast<hid_t>(id_));
   id_ = -1;
-  if (writable_ && comm_.isRoot()) {
+  if (writable_ && root_) {  // no MPI call here: the communicator may be gone
     std::error_code ec;
     std::filesystem::remove(writePath_, ec);
   }

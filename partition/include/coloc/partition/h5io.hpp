@@ -88,7 +88,7 @@ class H5File {
   Comm comm_;
   std::int64_t id_ = -1;
   std::string path_, writePath_;
-  bool writable_ = false, sync_ = false;
+  bool writable_ = false, sync_ = false, root_ = false;
 };
 
 // ---- fields: each rank writes/reads its owned block of the global array -----------------------
