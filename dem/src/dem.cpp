@@ -62,6 +62,13 @@ template <class T>
 std::size_t cap(const std::vector<T>& v) {
   return v.capacity() * sizeof(T);
 }
+
+/// Grow-only capacity with 1/8 headroom (instead of the 2x of push_back): the arrays hold at
+/// most ~12 % slack, and once the largest size has been seen nothing is allocated again.
+template <class T>
+void ensure(std::vector<T>& v, std::size_t need) {
+  if (v.capacity() < need) v.reserve(need + need / 8 + 16);
+}
 }  // namespace
 
 struct DemSolver::Impl {
@@ -97,9 +104,9 @@ struct DemSolver::Impl {
   std::array<std::vector<double>, 3> x0;
 
   // contact history per particle (between list builds and in migration)
-  std::vector<int> hStart, hStart2;
-  std::vector<std::int64_t> hId, hId2;
-  std::vector<double> hS, hS2;
+  std::vector<int> hStart;
+  std::vector<std::int64_t> hId;
+  std::vector<double> hS;
 
   // ghost plan: send lists per axis and side (0: to the low neighbour, 1: to the high one)
   struct Swap {
@@ -343,11 +350,24 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
     p.v[d][i] = q.v[d];
     p.omega[d][i] = p.f[d][i] = p.torque[d][i] = p.fExt[d][i] = 0;
   }
+  ensure(hStart, n + 1);
   hStart.resize(n + 1);
   hStart[n] = hStart[n - 1];
 }
 
 void DemSolver::Impl::resizeAll(std::size_t n) {
+  ensure(p.id, n);
+  ensure(p.material, n);
+  ensure(p.radius, n);
+  ensure(p.mass, n);
+  for (int d = 0; d < 3; ++d) {
+    ensure(p.x[d], n);
+    ensure(p.v[d], n);
+    ensure(p.omega[d], n);
+    ensure(p.f[d], n);
+    ensure(p.torque[d], n);
+    ensure(p.fExt[d], n);
+  }
   p.id.resize(n);
   p.material.resize(n);
   p.radius.resize(n);
@@ -487,11 +507,14 @@ void DemSolver::Impl::rebuild(bool first) {
 
 void DemSolver::Impl::packHistory() {
   const std::size_t n = p.nOwned;
+  ensure(hStart, n + 1);
   hStart.resize(n + 1);
   hId.clear();
   hS.clear();
   for (std::size_t i = 0; i < n; ++i) {
     hStart[i] = static_cast<int>(hId.size());
+    ensure(hId, hId.size() + 64);
+    ensure(hS, hS.size() + 3 * 64);
     for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
       const double* s = &shear[3 * static_cast<std::size_t>(e)];
       if (s[0] == 0 && s[1] == 0 && s[2] == 0) continue;
@@ -639,6 +662,9 @@ void DemSolver::Impl::migrate() {
         }
         const int nh = static_cast<int>(b[q + 16]);
         q += kMigFixed;
+        ensure(hId, hId.size() + static_cast<std::size_t>(nh));
+        ensure(hS, hS.size() + 3 * static_cast<std::size_t>(nh));
+        ensure(hStart, hStart.size() + 1);
         for (int e = 0; e < nh; ++e, q += 4) {
           hId.push_back(static_cast<std::int64_t>(b[q]));
           hS.insert(hS.end(), b.data() + q + 1, b.data() + q + 4);
@@ -653,6 +679,7 @@ void DemSolver::Impl::migrate() {
 void DemSolver::Impl::sortByBin() {
   const std::size_t n = p.nOwned;
   const std::size_t nBins = static_cast<std::size_t>(nbx[0]) * nbx[1] * nbx[2];
+  ensure(binOf, n);
   binOf.resize(n);
   binStart.assign(nBins + 1, 0);
   for (std::size_t i = 0; i < n; ++i) {
@@ -665,6 +692,7 @@ void DemSolver::Impl::sortByBin() {
     ++binStart[static_cast<std::size_t>(lb) + 1];
   }
   for (std::size_t b = 0; b < nBins; ++b) binStart[b + 1] += binStart[b];
+  ensure(perm, n);
   perm.resize(n);
   iscr.assign(binStart.begin(), binStart.end() - 1);
   for (std::size_t i = 0; i < n; ++i)
@@ -676,7 +704,8 @@ void DemSolver::Impl::sortByBin() {
                 [this](int u, int v) { return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)]; });
   }
   const auto apply = [&](auto& vec, auto& scratch) {
-    scratch.resize(n);
+    ensure(scratch, n);
+  scratch.resize(n);
     for (std::size_t k = 0; k < n; ++k) scratch[k] = vec[static_cast<std::size_t>(perm[k])];
     std::swap(vec, scratch);
   };
@@ -692,22 +721,8 @@ void DemSolver::Impl::sortByBin() {
     apply(p.torque[d], dscr);
     apply(p.fExt[d], dscr);
   }
-  // history rows follow their particles
-  hStart2.resize(n + 1);
-  hId2.clear();
-  hS2.clear();
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto i = static_cast<std::size_t>(perm[k]);
-    hStart2[k] = static_cast<int>(hId2.size());
-    for (int e = hStart[i]; e < hStart[i + 1]; ++e) {
-      hId2.push_back(hId[static_cast<std::size_t>(e)]);
-      hS2.insert(hS2.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
-    }
-  }
-  hStart2[n] = static_cast<int>(hId2.size());
-  std::swap(hStart, hStart2);
-  std::swap(hId, hId2);
-  std::swap(hS, hS2);
+  // the history rows stay in pre-sort order: buildLists reads row perm[k] for particle k
+  for (int d = 0; d < 3; ++d) ensure(x0[d], n);
   for (int d = 0; d < 3; ++d) x0[d].assign(p.x[d].begin(), p.x[d].begin() + static_cast<std::ptrdiff_t>(n));
 }
 
@@ -810,6 +825,7 @@ void DemSolver::Impl::buildLists() {
   const std::size_t nAll = p.size(), n = p.nOwned;
   const std::size_t nBins = static_cast<std::size_t>(nbx[0]) * nbx[1] * nbx[2];
   // bins of every local particle (owned clamped into the block, ghosts into the ghost layer)
+  ensure(binOf, nAll);
   binOf.resize(nAll);
   binStart.assign(nBins + 1, 0);
   for (std::size_t i = 0; i < nAll; ++i) {
@@ -824,6 +840,7 @@ void DemSolver::Impl::buildLists() {
     ++binStart[static_cast<std::size_t>(binOf[i]) + 1];
   }
   for (std::size_t b = 0; b < nBins; ++b) binStart[b + 1] += binStart[b];
+  ensure(binItems, nAll);
   binItems.resize(nAll);
   iscr.assign(binStart.begin(), binStart.end() - 1);
   for (std::size_t i = 0; i < nAll; ++i)
@@ -836,6 +853,7 @@ void DemSolver::Impl::buildLists() {
       });
   }
   // full Verlet list of owned rows: stencil bins in fixed order, partners by id inside a bin
+  ensure(rowStart, n + 1);
   rowStart.resize(n + 1);
   nbr.clear();
   shear.clear();
@@ -845,7 +863,8 @@ void DemSolver::Impl::buildLists() {
   const double* Z = p.x[2].data();
   const double* R = p.radius.data();
   const auto lookup = [&](std::size_t i, std::int64_t partner) {
-    for (int e = hStart[i]; e < hStart[i + 1]; ++e)
+    const auto h = static_cast<std::size_t>(perm[i]);  // history row of particle i (pre-sort)
+    for (int e = hStart[h]; e < hStart[h + 1]; ++e)
       if (hId[static_cast<std::size_t>(e)] == partner) {
         shear.insert(shear.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
         return;
@@ -854,6 +873,8 @@ void DemSolver::Impl::buildLists() {
   };
   for (std::size_t i = 0; i < n; ++i) {
     rowStart[i] = static_cast<int>(nbr.size());
+    ensure(nbr, nbr.size() + 64);
+    ensure(shear, shear.size() + 3 * 64);
     const int bi = binOf[i];
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
@@ -979,7 +1000,7 @@ std::size_t DemSolver::Impl::memory() const {
     b += cap(p.x[d]) + cap(p.v[d]) + cap(p.omega[d]) + cap(p.f[d]) + cap(p.torque[d]) +
          cap(p.fExt[d]) + cap(x0[d]);
   b += cap(binOf) + cap(binStart) + cap(binItems) + cap(rowStart) + cap(nbr) + cap(shear);
-  b += cap(hStart) + cap(hStart2) + cap(hId) + cap(hId2) + cap(hS) + cap(hS2);
+  b += cap(hStart) + cap(hId) + cap(hS);
   for (const auto& a : swaps)
     for (const auto& s : a) b += cap(s.send);
   b += cap(sbuf[0]) + cap(sbuf[1]) + cap(rbuf[0]) + cap(rbuf[1]);
