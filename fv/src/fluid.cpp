@@ -167,7 +167,7 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
   const CellField& e = f.eps;
   const CellField& K = f.K;
   std::size_t r = 0;
-  anyK = false;
+  bool localK = false;
   for (int k = 0; k < n[2]; ++k)
     for (int j = 0; j < n[1]; ++j)
       for (int i = 0; i < n[0]; ++i, ++r) {
@@ -184,7 +184,7 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
             const std::ptrdiff_t nb = c + (side == 0 ? -s : s);
             const double ef = 0.5 * (e.data()[c] + e.data()[nb]);
             const double kf = 0.5 * (K.data()[c] + K.data()[nb]);
-            if (kf != 0.0) anyK = true;
+            if (kf != 0.0) localK = true;
             if (!boundary) {
               w = ef * ef / ((ef + kf * dt) * h[a] * h[a]);
               row[1 + 2 * a + side] = -w;
@@ -197,6 +197,7 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
         }
         row[0] = diag;
       }
+  anyK = dec.comm().max(localK ? 1 : 0) == 1;  // the same rebuild decision on every rank
   ps->setMatrix(matrix);
   matrixDt = dt;
   coefficientsChanged = false;
@@ -303,9 +304,10 @@ void FluidSolver::Impl::step(double dt) {
     const double r = useAb2 ? dt / dtOld : 0.0;
     const double ca = useAb2 ? 1.0 + 0.5 * r : 1.0, cb = useAb2 ? -0.5 * r : 0.0;
     const double idt = 1.0 / dt;
+    // H of all three components from u^n first; then the in-place update of u.
+    for (int c = 0; c < 3; ++c) explicitTerms(c, f.u, M, f.epsOld, mom, interiorFaces(c), Hn[c]);
     for (int c = 0; c < 3; ++c) {
       const IndexBox box = interiorFaces(c);
-      explicitTerms(c, f.u, M, f.epsOld, mom, box, Hn[c]);
       auto& U = f.u[c];
       auto& P = uPrev[c];
       const std::ptrdiff_t cs = strideOf(f.eps, c);
@@ -491,6 +493,10 @@ FluidFields& FluidSolver::fields() {
 const FluidFields& FluidSolver::fields() const { return impl_->f; }
 void FluidSolver::markCoefficientsChanged() { impl_->coefficientsChanged = true; }
 void FluidSolver::step(double dt) { impl_->step(dt); }
+void FluidSolver::syncEpsOld() {
+  auto& f = impl_->f;
+  std::copy(f.eps.data().begin(), f.eps.data().end(), f.epsOld.data().begin());
+}
 double FluidSolver::time() const { return impl_->time; }
 long long FluidSolver::stepCount() const { return impl_->steps; }
 

@@ -47,6 +47,9 @@ class FluidSolver {
   const FluidFields& fields() const;
   /// Tell the solver eps or K changed since the last step (the matrix is rebuilt in step()).
   void markCoefficientsChanged();
+  /// eps^n <- eps (owned cells): call once after writing the initial eps, before the first step,
+  /// so that the first step sees no d(eps)/dt from the constructor's eps = 1.
+  void syncEpsOld();
   /// Advance one step of size dt.
   void step(double dt);
   /// The time step the case asks for now: fixed, or adaptive from CFL and viscous limits.
