@@ -53,7 +53,7 @@ struct FluidSolver::Impl {
   HaloPlan cellHalo;
   std::array<HaloPlan, 3> faceHalo;
   // State.
-  bool uGhostsFresh = false, coefficientsChanged = true, haveOld = false;
+  bool uGhostsFresh = false, coefficientsChanged = true, haveOld = false, ratesStale = false;
   double time = 0, dtOld = 0, matrixDt = -1;
   bool anyK = false;
   long long steps = 0;
@@ -480,6 +480,7 @@ void FluidSolver::Impl::step(double dt) {
   dtLast = dt;
   haveOld = true;
   computeRates(dt);
+  ratesStale = false;
 }
 
 FluidSolver::FluidSolver(const Decomposition& dec, const Config& cfg, Timers& timers)
@@ -488,6 +489,7 @@ FluidSolver::~FluidSolver() = default;
 
 FluidFields& FluidSolver::fields() {
   impl_->uGhostsFresh = false;
+  impl_->ratesStale = true;
   return impl_->f;
 }
 const FluidFields& FluidSolver::fields() const { return impl_->f; }
@@ -501,8 +503,14 @@ double FluidSolver::time() const { return impl_->time; }
 long long FluidSolver::stepCount() const { return impl_->steps; }
 
 double FluidSolver::nextDt() const {
-  const auto& m = *impl_;
+  auto& m = *impl_;
   if (!m.adaptive) return m.dtFixed;
+  if (m.ratesStale) {
+    // The velocity was written through fields() since the last step: recompute the rate
+    // (collective, like step()).
+    m.computeRates(0.0);
+    m.ratesStale = false;
+  }
   // Explicit terms: convective rate R = max sum_d |u_d|/h_d (CFL = R dt) and viscous rate
   // V = nu (4 sum 1/h^2 + 4 max 1/h^2) (largest eigenvalue of the full-stress operator). The two
   // add in the Adams-Bashforth stability region, so dt = 1 / (R/cfl + V): the CFL target is met

@@ -53,6 +53,8 @@ class FluidSolver {
   /// Advance one step of size dt.
   void step(double dt);
   /// The time step the case asks for now: fixed, or adaptive from CFL and viscous limits.
+  /// Collective when adaptive and the fields were written through fields() since the last step
+  /// (the velocity rate is then recomputed); call it on every rank.
   double nextDt() const;
   double time() const;
   long long stepCount() const;
