@@ -69,7 +69,7 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
   // The initial porosity: deposit the particle volume once and start with eps^0 = eps^1 so the
   // first step sees no spurious d(eps)/dt.
   computeStencils();
-  evaluateDrag();  // beta is not used yet; sizes the buffers
+  evaluateDrag(0.0);  // beta is not used yet (K starts at zero)
   depositParticles();
   sumDepositsAcrossBlocks();
   updateFluidCoefficients();
@@ -80,6 +80,8 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
     for (int d = 0; d < 3; ++d) f.KUp[d](i, j, k) = 0.0;
   });
   refreshCellVelocity();
+  fluid_->pressureGradient(gradP_);
+  for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
 }
 
 Simulation::~Simulation() = default;
@@ -112,7 +114,7 @@ void Simulation::step() {
       const double dt = static_cast<double>(nSub) * dem_->dt();
       computeStencils();
       sampleFluidForDrag();
-      evaluateDrag();
+      evaluateDrag(dt);
       depositParticles();
       sumDepositsAcrossBlocks();
       updateFluidCoefficients();
@@ -160,24 +162,43 @@ void Simulation::sampleFluidForDrag() {
   ScopedPhase t(timers_, Phase::ExchangeLocal);
   const std::size_t n = stencils_.count();
   interpolate(stencils_, eps_, epsAt_);
-  for (int d = 0; d < 3; ++d) interpolate(stencils_, uCell_[d], uAt_[d]);
+  for (int d = 0; d < 3; ++d) {
+    interpolate(stencils_, uCell_[d], uAt_[d]);
+    interpolate(stencils_, gradP_[d], gradPAt_[d]);
+  }
   timers_.book(Exchange::InterPhysicsLocal,
-               static_cast<long long>(n * 4 * (stencils_.width() + 1) * sizeof(double)), 0);
+               static_cast<long long>(n * 7 * (stencils_.width() + 1) * sizeof(double)), 0);
 }
 
-void Simulation::evaluateDrag() {
+void Simulation::evaluateDrag(double dt) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
   const auto& p = dem_->particles();
   const std::size_t n = stencils_.count();
+  const bool frozen = mode_ == RunMode::DummyDem;
   for (std::size_t i = 0; i < n; ++i) {
     double slip2 = 0;
     for (int d = 0; d < 3; ++d) {
-      vDep_[d][i] = p.v[d][i];
       const double s = uAt_[d][i] - p.v[d][i];
       slip2 += s * s;
     }
     const double eps = std::clamp(epsAt_[i], epsMin_, 1.0);
-    beta_[i] = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
+    const double beta = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
+    if (frozen || dt <= 0) {
+      // Particles that cannot move: the plain coefficient and their (zero) velocity.
+      beta_[i] = beta;
+      for (int d = 0; d < 3; ++d) vDep_[d][i] = p.v[d][i];
+    } else {
+      // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
+      // velocity the particle would reach without drag, v~ = v + dt a, with a the non-drag
+      // acceleration: contacts and gravity (the DEM's last total force less the coupling force
+      // it held) and the pressure-gradient force -V rho_f grad p^n.
+      const double m = p.mass[i];
+      beta_[i] = beta / (1.0 + dt * beta / m);
+      for (int d = 0; d < 3; ++d) {
+        const double nonDrag = p.f[d][i] - p.fExt[d][i] - volume_[i] * rhoF_ * gradPAt_[d][i];
+        vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
+      }
+    }
     for (int d = 0; d < 3; ++d) betaV_[d][i] = beta_[i] * vDep_[d][i];
   }
 }
@@ -262,12 +283,15 @@ void Simulation::applyCouplingForces(double dt) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
   auto& p = dem_->particles();
   const std::size_t n = stencils_.count();
-  double sums[6] = {0, 0, 0, 0, 0, 0};
+  // sums: particle drag impulse (3), fluid drag momentum change (3), gross magnitude of the
+  // exchanged terms sum beta' (|u| + |v~|) dt (3): the scale of round-off in the balance.
+  double sums[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   for (std::size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) {
       const double drag = beta_[i] * (uAt_[d][i] - vDep_[d][i]);
       p.fExt[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
       sums[d] += drag * dt;
+      sums[6 + d] += beta_[i] * (std::abs(uAt_[d][i]) + std::abs(vDep_[d][i])) * dt;
     }
   }
   // What the fluid lost through its drag term over the step: rho V (K u - K u_p) dt per cell.
@@ -277,15 +301,15 @@ void Simulation::applyCouplingForces(double dt) {
     for (int d = 0; d < 3; ++d)
       sums[3 + d] -= rv * (f.K(i, j, k) * uCell_[d](i, j, k) - f.KUp[d](i, j, k));
   });
-  dec_.comm().sumInPlace(std::span<double>(sums, 6));
-  double scale = 0, diff = 0;
+  dec_.comm().sumInPlace(std::span<double>(sums, 9));
+  double gross = 0, diff = 0;
   for (int d = 0; d < 3; ++d) {
     particleImpulse_[d] = sums[d];
     fluidImpulse_[d] = sums[3 + d];
-    scale = std::max({scale, std::abs(sums[d]), std::abs(sums[3 + d])});
+    gross = std::max(gross, sums[6 + d]);
     diff = std::max(diff, std::abs(sums[d] + sums[3 + d]));
   }
-  if (scale > 0) momentumResidual_ = std::max(momentumResidual_, diff / scale);
+  if (gross > 0) momentumResidual_ = std::max(momentumResidual_, diff / gross);
 }
 
 void Simulation::advanceParticles(int n) {

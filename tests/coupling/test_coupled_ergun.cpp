@@ -25,7 +25,7 @@ std::string bedCase(double u) {
                "boundary": { "xlo": { "type": "inlet", "velocity": [%.17g, 0, 0] },
                              "xhi": { "type": "outlet", "pressure": 0.0 } },
                "pressure": { "tol": 1e-12 } },
-    "particles": { "dt": 1e-4,
+    "particles": { "dt": 5e-5,
       "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3 } ],
       "sources": [ { "type": "lattice", "lo": [0.0405, 0.0005, 0.0005], "counts": [40, 16, 16],
                      "spacing": [0.001, 0.001, 0.001], "radius": %.17g } ] },

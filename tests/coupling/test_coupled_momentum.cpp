@@ -12,7 +12,7 @@ const char* kCase = R"({
   "run": { "steps": 4 },
   "fluid": { "nu": 1e-6, "rho": 1000.0, "initial_velocity": [0.02, 0.0, 0.0], "dt": 1e-3 },
   "particles": {
-    "dt": 1e-4,
+    "dt": 5e-5,
     "materials": [ { "density": 2500.0, "young": 1e6, "poisson": 0.3 } ],
     "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.078, 0.058, 0.048],
                    "count": 60, "radius": 0.0015, "velocity_spread": 0.05 } ]

@@ -26,7 +26,7 @@ std::string settlingCase(double d, double rhoP, double h, double dtFluid, double
     "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": %.17g,
                "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 } },
                "pressure": { "tol": 1e-12 } },
-    "particles": { "dt": %.17g,
+    "particles": { "dt": %.17g, "bin_cells": 1,
       "materials": [ { "density": %.17g, "young": 1e3, "poisson": 0.3, "restitution": 0.9 } ],
       "sources": [ { "type": "list", "positions": [%.17g, %.17g, %.17g], "radius": %.17g } ] },
     "coupling": { "drag": "%s", "kernel": "trilinear" }
@@ -49,10 +49,10 @@ double settle(const std::string& text) {
 }  // namespace
 
 TEST(Settling, StokesTerminalVelocity) {
-  const double d = 1e-4, rhoP = 2500.0, mu = 1e-3;
-  const double vt = (rhoP - 1000.0) * 9.81 * d * d / (18.0 * mu);  // 8.175e-3 m/s
-  const double tau = rhoP * d * d / (18.0 * mu);                   // 1.39e-3 s
-  ASSERT_LT(1000.0 * vt * d / mu, 0.1);                            // Re < 0.1
+  const double d = 4e-5, rhoP = 2500.0, mu = 1e-3;
+  const double vt = (rhoP - 1000.0) * 9.81 * d * d / (18.0 * mu);  // 1.31e-3 m/s
+  const double tau = rhoP * d * d / (18.0 * mu);                   // 2.2e-4 s
+  ASSERT_LT(1000.0 * vt * d / mu, 0.1);                            // Re = 0.05
   const double v = settle(settlingCase(d, rhoP, 100 * d, tau / 8, tau / 160, "stokes", 25 * tau));
   EXPECT_NEAR(v / vt, 1.0, 0.01) << "v = " << v << ", Stokes " << vt;
 }
