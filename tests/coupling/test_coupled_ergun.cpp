@@ -4,6 +4,7 @@
 //   -dP/dx = 150 mu (1-eps)^2 U / (eps^3 d^2) + 1.75 rho (1-eps) U^2 / (eps^3 d)
 // at three superficial velocities U (particle Reynolds numbers about 2, 10 and 50).
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "coupled_util.hpp"
@@ -67,6 +68,9 @@ TEST_P(Ergun, BedPressureGradient) {
   const double measured = -kRho * slope;
   const double ergun = 150.0 * kMu * (1 - eps) * (1 - eps) * u / (eps * eps * eps * kD * kD) +
                        1.75 * kRho * (1 - eps) * u * u / (eps * eps * eps * kD);
+  if (dec.comm().isRoot())
+    std::printf("Ergun bed U = %g m/s: eps %.4f, -dP/dx %.6g Pa/m, Ergun %.6g Pa/m, ratio %.4f\n", u,
+                eps, measured, ergun, measured / ergun);
   EXPECT_NEAR(eps, 0.40, 0.005);
   EXPECT_NEAR(measured / ergun, 1.0, 0.05)
       << "U = " << u << " eps = " << eps << " measured " << measured << " Pa/m, Ergun " << ergun;

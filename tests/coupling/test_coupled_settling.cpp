@@ -7,6 +7,7 @@
 // CFD-DEM) stays well below the tolerance. The sphere is alone, so its material is soft (E = 1 kPa)
 // only to keep the DEM time-step check (a fraction of the Rayleigh time) out of the way.
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "coupled_util.hpp"
@@ -54,6 +55,7 @@ TEST(Settling, StokesTerminalVelocity) {
   const double tau = rhoP * d * d / (18.0 * mu);                   // 2.2e-4 s
   ASSERT_LT(1000.0 * vt * d / mu, 0.1);                            // Re = 0.05
   const double v = settle(settlingCase(d, rhoP, 100 * d, tau / 8, tau / 160, "stokes", 25 * tau));
+  std::printf("Stokes settling: v = %.6e m/s, Stokes law %.6e m/s, ratio %.5f\n", v, vt, v / vt);
   EXPECT_NEAR(v / vt, 1.0, 0.01) << "v = " << v << ", Stokes " << vt;
 }
 
@@ -76,6 +78,8 @@ TEST(Settling, DiFeliceTerminalVelocityAtReTen) {
   const double tau = rhoP * vp / coupling::dragCoefficient(coupling::DragLaw::DiFelice, 1.0, d, vt,
                                                            rhoF, nu);
   const double v = settle(settlingCase(d, rhoP, 100 * d, tau / 10, tau / 200, "difelice", 12 * tau));
+  std::printf("Di Felice settling: v = %.6e m/s, force balance %.6e m/s, ratio %.5f, Re %.2f\n", v,
+              vt, v / vt, vt * d / nu);
   EXPECT_NEAR(v / vt, 1.0, 0.02) << "v = " << v << ", force balance " << vt << ", Re "
                                  << vt * d / nu;
 }
