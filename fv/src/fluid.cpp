@@ -367,6 +367,8 @@ void FluidSolver::Impl::step(double dt) {
     std::size_t r = 0;
     double sum = 0, dvol = 0;
     scale2 = 0;
+    Int3 badCell{-1, -1, -1};
+    double badValue = 0;
     const double idt = 1.0 / dt;
     const double* en = f.eps.data().data();
     const double* eo = f.epsOld.data().data();
@@ -395,6 +397,10 @@ void FluidSolver::Impl::step(double dt) {
           }
           const double de = en[c] - eo[c];
           rhs[r] = -div - de * idt;
+          if (!std::isfinite(rhs[r]) && badCell[0] < 0) {
+            badCell = {dec.lo()[0] + i, dec.lo()[1] + j, dec.lo()[2] + k};
+            badValue = rhs[r];
+          }
           const double sc = flux + std::fabs(de) * idt;
           scale2 += sc * sc;
           dvol += de;
@@ -402,6 +408,21 @@ void FluidSolver::Impl::step(double dt) {
           sol[r] = f.p.data()[c] * dt;  // warm start
         }
     dVolLocal = dvol * dec.grid().cellVolume() / dt;
+    rhsScaleLast = std::sqrt(dec.comm().sum(scale2));
+    if (!std::isfinite(rhsScaleLast)) {
+      // Every rank sees the non-finite global sum; the ranks that own a bad cell say where.
+      std::string err;
+      if (badCell[0] >= 0) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "fluid step %lld: non-finite velocity after the predictor: divergence %g at "
+                      "cell (%d, %d, %d) (global index)",
+                      steps + 1, badValue, badCell[0], badCell[1], badCell[2]);
+        err = buf;
+      }
+      dec.comm().raiseIfAny(err);
+      throw Error("fluid step " + std::to_string(steps + 1) + ": non-finite velocity");
+    }
     if (singular) {
       // All faces Neumann or periodic: remove the (round-off, or physically inconsistent) mean.
       const double mean = dec.comm().sum(sum) / static_cast<double>(dec.grid().cellCount());
@@ -410,10 +431,9 @@ void FluidSolver::Impl::step(double dt) {
   }
   {
     ScopedPhase t(timers, Phase::FluidPressureSolve);
-    const double scale = std::sqrt(dec.comm().sum(scale2));
+    const double scale = rhsScaleLast;
     itLast = ps->solve(rhs, sol, scale);
     resLast = scale > 0 ? ps->lastResidualNorm() / scale : 0.0;
-    rhsScaleLast = scale;
     itSum += itLast;
     ++solves;
     itMax = std::max(itMax, itLast);
