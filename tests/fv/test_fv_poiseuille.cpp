@@ -58,3 +58,37 @@ TEST(FvPoiseuille, ErrorAndSecondOrder) {
   EXPECT_GE(p1, 1.8);
   EXPECT_GE(p2, 1.8);
 }
+
+// A fluid-only run from a case file stops at the steady state (fluid.steady_tol) with the same
+// profile, or after run.steps.
+TEST(FvPoiseuille, FluidOnlyRunStopsAtSteadyState) {
+  const std::string text = R"({
+    "run": {"mode": "fluid", "steps": 0, "end_time": 100.0},
+    "domain": {"length": [0.375, 1.0, 0.375], "cells": [3, 8, 3], "periodic": {"x": true, "z": true}},
+    "fluid": {"nu": 0.5, "body_force": [4.0, 0, 0], "convection": "central", "adaptive_dt": true,
+              "dt": 1.0, "steady_tol": 1e-11, "pressure": {"tol": 1e-12}}
+  })";
+  const Config cfg = fvtest::config(text);
+  const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
+  Timers timers;
+  fv::FluidSolver solver(dec, cfg, timers);
+  const Json r = fv::runFluidOnly(solver, cfg);
+  EXPECT_EQ(r["stop"], "steady");
+  EXPECT_LT(r["sim_time"].get<double>(), 100.0);
+  double err2 = 0, ref2 = 0;
+  forEach(fvtest::ownedFaces(dec, 0), [&](int i, int j, int k) {
+    const double y = fvtest::facePos(dec, 0, i, j, k)[1];
+    const double ue = 4.0 * y * (1 - y);
+    err2 += std::pow(solver.fields().u[0](i, j, k) - ue, 2);
+    ref2 += ue * ue;
+  });
+  // The 8-cell discrete solution's error (2.139e-2, ErrorAndSecondOrder) is reached.
+  EXPECT_NEAR(std::sqrt(dec.comm().sum(err2) / dec.comm().sum(ref2)), 2.139e-2, 1e-4);
+
+  const Config cfg2 = fvtest::config(text, {"run.steps=7"});
+  fv::FluidSolver solver2(dec, cfg2, timers);
+  const Json r2 = fv::runFluidOnly(solver2, cfg2);
+  EXPECT_EQ(r2["stop"], "steps");
+  EXPECT_EQ(r2["steps"], 7);
+  EXPECT_EQ(solver2.stepCount(), 7);
+}

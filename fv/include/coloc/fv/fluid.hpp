@@ -57,6 +57,8 @@ class FluidSolver {
   /// (the velocity rate is then recomputed); call it on every rank.
   double nextDt() const;
   double time() const;
+  /// max|u^{n+1}-u^n| / max|u^{n+1}| of the last step (same value on every rank).
+  double steadyResidual() const;
   long long stepCount() const;
 
   /// Cell-centred velocity (mean of the two faces) with one ghost layer filled.
@@ -72,5 +74,11 @@ class FluidSolver {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// A fluid-only run (run.mode = fluid): steps of nextDt() until run.steps are done (or, with
+/// run.steps = 0, until run.end_time is reached; the last step is shortened to land on it), or
+/// until the steady residual falls below fluid.steady_tol (> 0). Collective. Returns
+/// {"steps", "sim_time", "stop": "steps" | "end_time" | "steady", "wall_s"}.
+Json runFluidOnly(FluidSolver& solver, const Config& cfg);
 
 }  // namespace coloc::fv
