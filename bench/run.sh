@@ -1,15 +1,30 @@
 #!/usr/bin/env bash
-# bench/run.sh [CASE.json] [RANKS] [coloc run options...]
-# Install what is missing, build, and run the main job: by default benchmark 1
-# (bench/cases/case1.json) on 2 ranks, writing out/case1/report.json.
+# bench/run.sh                       benchmark 1 on 1 and 2 ranks + its plot (the main job)
+# bench/run.sh CASE.json [RANKS] [coloc run options...]   any case
+# Installs what is missing, builds, runs, and says where the report went.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${COLOC_BUILD_DIR:-$root/build}
-case=${1:-$root/bench/cases/case1.json}
-ranks=${2:-2}
-shift $(( $# > 2 ? 2 : $# ))
 "$root/cmake/setup.sh" "$build"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none
-name=$(basename "$case" .json)
-mpiexec -n "$ranks" --bind-to none "$build/coloc" run "$case" --out "$root/out/$name" "$@"
+run() { mpiexec -n "$1" --bind-to none "$build/coloc" run "${@:2}"; }
+
+if [[ $# -ge 1 ]]; then
+  case=$1
+  ranks=${2:-2}
+  shift $(( $# >= 2 ? 2 : 1 ))
+  name=$(basename "$case" .json)
+  run "$ranks" "$case" --out "$root/out/$name" "$@"
+  exit 0
+fi
+
+# The main job: benchmark 1 (one particle crossing a process boundary), serial and parallel,
+# and the paper's figure with both runs on the same axes.
+case=$root/bench/cases/case1.json
+run 1 "$case" --out "$root/out/case1-np1"
+run 2 "$case" --out "$root/out/case1-np2"
+/usr/bin/python3 "$root/bench/scripts/plot_case1.py" "$root/out/case1-np1/series.csv" \
+  "$root/out/case1-np2/series.csv" --labels SEQ PAR --out "$root/out/case1.png"
+echo "bench/run.sh: reports in out/case1-np1/report.json and out/case1-np2/report.json," \
+     "time series in out/case1-np*/series.csv, figure in out/case1.png"

@@ -103,13 +103,14 @@ int runCase(const Comm& world, const RunOptions& opts) {
   if (world.isRoot()) makeDirectories(outDir);
   coupling::Simulation sim(world, cfg);
   const double setupWall = MPI_Wtime() - t0;
+  const long long particleCount = sim.particles() ? sim.particles()->globalCount() : 0;  // collective
   if (world.isRoot() && !opts.quiet) {
     const auto& dec = sim.decomposition();
     std::printf("coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
                 "set-up %.2f s\n",
                 cfg.string("name").c_str(), runModeName(sim.mode()), dec.size(), dec.dims()[0],
                 dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()),
-                sim.particles() ? sim.particles()->globalCount() : 0LL, setupWall);
+                particleCount, setupWall);
   }
   Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"));
   Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);

@@ -122,6 +122,7 @@ void Simulation::step() {
       refreshCellVelocity();
       sampleFluidForForces();
       applyCouplingForces(dt);
+      handForcesToParticles();
       advanceParticles(static_cast<int>(nSub));
       lastDt_ = dt;
       break;
@@ -136,7 +137,7 @@ void Simulation::resizeParticleBuffers(std::size_t n) {
   const std::size_t cap = std::max(n, volume_.size() + volume_.size() / 4);
   for (auto* v : {&volume_, &beta_, &epsAt_}) v->resize(cap);
   for (int d = 0; d < 3; ++d)
-    for (auto* a : {&uAt_, &vDep_, &betaV_, &gradPAt_}) (*a)[d].resize(cap);
+    for (auto* a : {&uAt_, &vDep_, &betaV_, &gradPAt_, &force_}) (*a)[d].resize(cap);
 }
 
 void Simulation::computeStencils() {
@@ -159,15 +160,12 @@ void Simulation::computeStencils() {
 }
 
 void Simulation::sampleFluidForDrag() {
-  ScopedPhase t(timers_, Phase::ExchangeLocal);
-  const std::size_t n = stencils_.count();
+  ScopedPhase t(timers_, Phase::CouplingInterpolate);
   interpolate(stencils_, eps_, epsAt_);
   for (int d = 0; d < 3; ++d) {
     interpolate(stencils_, uCell_[d], uAt_[d]);
     interpolate(stencils_, gradP_[d], gradPAt_[d]);
   }
-  timers_.book(Exchange::InterPhysicsLocal,
-               static_cast<long long>(n * 7 * (stencils_.width() + 1) * sizeof(double)), 0);
 }
 
 void Simulation::evaluateDrag(double dt) {
@@ -204,7 +202,7 @@ void Simulation::evaluateDrag(double dt) {
 }
 
 void Simulation::depositParticles() {
-  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  ScopedPhase t(timers_, Phase::CouplingDeposit);
   auto& f = fluid_->fields();
   const double vCell = dec_.grid().cellVolume();
   const double s = 1.0 / (rhoF_ * vCell);
@@ -216,8 +214,6 @@ void Simulation::depositParticles() {
   deposit(stencils_, std::span<const double>(beta_.data(), n), s, f.K);
   for (int d = 0; d < 3; ++d)
     deposit(stencils_, std::span<const double>(betaV_[d].data(), n), s, f.KUp[d]);
-  timers_.book(Exchange::InterPhysicsLocal,
-               static_cast<long long>(n * 5 * (stencils_.width() + 1) * sizeof(double)), 0);
 }
 
 void Simulation::sumDepositsAcrossBlocks() {
@@ -252,7 +248,7 @@ void Simulation::advanceFluid(double dt) {
 }
 
 void Simulation::refreshCellVelocity() {
-  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  ScopedPhase t(timers_, Phase::FluidCellFields);
   std::swap(uCell_, uCellOld_);
   fluid_->cellVelocity(uCell_);
   for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
@@ -267,21 +263,20 @@ void Simulation::refreshCellVelocity() {
 }
 
 void Simulation::sampleFluidForForces() {
-  ScopedPhase t(timers_, Phase::ExchangeLocal);
-  fluid_->pressureGradient(gradP_);
-  for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
-  const std::size_t n = stencils_.count();
+  {
+    ScopedPhase t(timers_, Phase::FluidCellFields);
+    fluid_->pressureGradient(gradP_);
+    for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
+  }
+  ScopedPhase t(timers_, Phase::CouplingInterpolate);
   for (int d = 0; d < 3; ++d) {
     interpolate(stencils_, uCell_[d], uAt_[d]);
     interpolate(stencils_, gradP_[d], gradPAt_[d]);
   }
-  timers_.book(Exchange::InterPhysicsLocal,
-               static_cast<long long>(n * 6 * (stencils_.width() + 1) * sizeof(double)), 0);
 }
 
 void Simulation::applyCouplingForces(double dt) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
-  auto& p = dem_->particles();
   const std::size_t n = stencils_.count();
   // sums: particle drag impulse (3), fluid drag momentum change (3), gross magnitude of the
   // exchanged terms sum beta' (|u| + |v~|) dt (3): the scale of round-off in the balance.
@@ -289,7 +284,7 @@ void Simulation::applyCouplingForces(double dt) {
   for (std::size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) {
       const double drag = beta_[i] * (uAt_[d][i] - vDep_[d][i]);
-      p.fExt[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
+      force_[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
       sums[d] += drag * dt;
       sums[6 + d] += beta_[i] * (std::abs(uAt_[d][i]) + std::abs(vDep_[d][i])) * dt;
     }
@@ -310,6 +305,14 @@ void Simulation::applyCouplingForces(double dt) {
     diff = std::max(diff, std::abs(sums[d] + sums[3 + d]));
   }
   if (gross > 0) momentumResidual_ = std::max(momentumResidual_, diff / gross);
+}
+
+void Simulation::handForcesToParticles() {
+  ScopedPhase t(timers_, Phase::ExchangeLocal);
+  auto& p = dem_->particles();
+  const std::size_t n = stencils_.count();
+  for (int d = 0; d < 3; ++d) std::copy_n(force_[d].data(), n, p.fExt[d].data());
+  timers_.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n * sizeof(double)), 0);
 }
 
 void Simulation::advanceParticles(int n) {

@@ -24,6 +24,7 @@ enum class Phase : std::uint8_t {
   FluidPressureAssemble, // matrix and right-hand side of the pressure equation
   FluidPressureSolve,    // hypre PCG+PFMG
   FluidProject,          // velocity correction
+  FluidCellFields,       // cell-centred velocity and pressure gradient the coupling samples
   // dem: one sub-step
   DemNeighbor,   // binning, sorting, Verlet lists
   DemForce,      // contact and wall forces
@@ -55,6 +56,7 @@ inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> k
     {"fluid_pressure_assemble", Category::Fluid},
     {"fluid_pressure_solve", Category::Fluid},
     {"fluid_project", Category::Fluid},
+    {"fluid_cell_fields", Category::Fluid},
     {"dem_neighbor", Category::Particles},
     {"dem_force", Category::Particles},
     {"dem_integrate", Category::Particles},

@@ -5,15 +5,22 @@
 // (SPEC section 3, ../shared/ARCHITECTURE.md):
 //
 //   computeStencils()            particles' kernel cells and weights         (coupling)
-//   sampleFluidForDrag()         eps^n, u^n at the particles                 (inter-physics, local)
+//   sampleFluidForDrag()         eps^n, u^n, grad p^n at the particles       (coupling)
 //   evaluateDrag()               beta_i from the drag law                    (coupling)
-//   depositParticles()           V_p, beta, beta v_p -> cells                (inter-physics, local)
+//   depositParticles()           V_p, beta, beta v_p -> cells                (coupling)
 //   sumDepositsAcrossBlocks()    reverse halo sum over block faces           (inter-physics, remote)
 //   updateFluidCoefficients()    eps^{n+1} = clip(1 - solid), K, K u_p       (coupling)
 //   advanceFluid()               fv::FluidSolver::step                      (fluid)
-//   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (inter-physics, local)
+//   refreshCellVelocity()        cell-centred u^{n+1} (and grad p^{n+1})    (fluid)
+//   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (coupling)
 //   applyCouplingForces()        F = beta (u - v) - V_p rho_f grad p         (coupling)
+//   handForcesToParticles()      forces -> the DEM's external force array    (inter-physics, local)
 //   advanceParticles()           n_sub DEM sub-steps                         (particles)
+//
+// Co-location makes the kernels read the fluid's arrays and the particle arrays of the same rank
+// directly: the deposition and interpolation are coupling arithmetic (SPEC section 4), and the
+// only data that moves between the two physics is the reverse halo sum of the deposited fields
+// across block faces (remote) and the hand-over of the forces to the DEM (local).
 //
 // Drag is semi-implicit in the fluid (Xiao & Sun 2011): the fluid's drag term is
 // K (u_p~ - u^{n+1}) with K = sum beta'_i / (rho_f V). The particles receive the same force,
@@ -91,6 +98,7 @@ class Simulation {
   void advanceFluid(double dt);
   void sampleFluidForForces();
   void applyCouplingForces(double dt);
+  void handForcesToParticles();
   void advanceParticles(int n);
   void refreshCellVelocity();
   void resizeParticleBuffers(std::size_t n);
@@ -116,7 +124,7 @@ class Simulation {
 
   // Per-particle buffers (owned particles; grow-only).
   std::vector<double> volume_, beta_, epsAt_;
-  std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_;
+  std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_, force_;
 
   double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
