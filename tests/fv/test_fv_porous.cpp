@@ -65,3 +65,58 @@ TEST(FvPorous, DarcyBrinkmanPressureDrop) {
                 p1 - p2, ref, 100 * err);
   EXPECT_LE(err, 0.01);
 }
+
+// Drag exchange bookkeeping for the coupling: triply periodic box, uniform eps = 0.7 (so the
+// pressure term -eps grad p, convection and viscous fluxes sum to zero over the box), nonuniform
+// K, particles moving at U_p (KUp = K U_p), fluid initially at rest, no gravity. The fluid
+// momentum sum_f eps_f u_f V must change each step by exactly dt * drag_force (the diagnostics
+// entry the coupling compares with the particles' drag impulse): to 1e-12 relative.
+TEST(FvPorous, DragImpulseEqualsFluidMomentumChange) {
+  const std::string text = R"({
+    "run": {"mode": "fluid"},
+    "domain": {"length": [1.0, 0.8, 0.6], "cells": [10, 8, 6],
+               "periodic": {"x": true, "y": true, "z": true}},
+    "fluid": {"nu": 0.01, "dt": 0.01, "pressure": {"tol": 1e-12}}
+  })";
+  const Config cfg = fvtest::config(text);
+  const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
+  Timers timers;
+  fv::FluidSolver solver(dec, cfg, timers);
+  const Real3 up{0.3, -0.2, 0.1};
+  auto& f = solver.fields();
+  forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
+    const Real3 x = fvtest::cellPos(dec, i, j, k);
+    f.eps(i, j, k) = 0.7;
+    f.K(i, j, k) = 5.0 + 2.0 * std::cos(2 * M_PI * x[2] / 0.6) * std::sin(2 * M_PI * x[0]);
+    for (int c = 0; c < 3; ++c) f.KUp[c](i, j, k) = f.K(i, j, k) * up[c];
+  });
+  solver.syncEpsOld();
+  solver.markCoefficientsChanged();
+  auto momentum = [&]() {
+    Real3 m{0, 0, 0};
+    const auto& ff = std::as_const(solver).fields();
+    for (int c = 0; c < 3; ++c)
+      forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
+        const int di = c == 0, dj = c == 1, dk = c == 2;
+        const double ef = 0.5 * (ff.eps(i, j, k) + ff.eps(i - di, j - dj, k - dk));
+        m[c] += ef * ff.u[c](i, j, k) * dec.grid().cellVolume();
+      });
+    for (auto& v : m) v = dec.comm().sum(v);
+    return m;
+  };
+  double worst = 0;
+  for (int n = 0; n < 5; ++n) {
+    const Real3 m0 = momentum();
+    solver.step(0.01);
+    std::array<CellField, 3> uc;
+    solver.cellVelocity(uc);  // fills the eps/u ghosts used by momentum()
+    const Real3 m1 = momentum();
+    const Json d = solver.diagnostics();
+    for (int c = 0; c < 3; ++c) {
+      const double impulse = 0.01 * d["fluid"]["drag_force"][c].get<double>();
+      worst = std::max(worst, std::fabs((m1[c] - m0[c]) - impulse) / std::fabs(impulse));
+    }
+  }
+  if (dec.comm().isRoot()) std::printf("drag impulse vs fluid momentum change: %.2e\n", worst);
+  EXPECT_LE(worst, 1e-12);
+}

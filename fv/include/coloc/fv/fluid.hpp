@@ -66,8 +66,12 @@ class FluidSolver {
   /// Cell-centred gradient of the kinematic pressure with one ghost layer filled.
   void pressureGradient(std::array<CellField, 3>& out);
 
-  /// Report entries: pressure.{iterations_avg,iterations_max,residual_last},
-  /// checks.mass_balance, fluid.* diagnostics. Collective.
+  /// Report entries: pressure.{iterations_avg,iterations_max,iterations_last,residual_last,
+  /// rhs_scale_last,setups}, checks.mass_balance, fluid.{steps,time,dt_last,cfl_last,
+  /// steady_residual,inflow,outflow,volume_rate,drag_force}. drag_force is the drag the fluid
+  /// received in the last step, sum over the faces the predictor advanced of
+  /// V (KUp_f - K_f u_f^{n+1}) (per unit fluid density, m^4/s^2): the semi-implicit drag is
+  /// implicit in the projected u^{n+1}. Collective.
   Json diagnostics() const;
 
  private:
