@@ -114,9 +114,12 @@ int runCase(const Comm& world, const RunOptions& opts) {
   }
   Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"));
   Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);
+  OutputWriter output(sim.decomposition(), outputOptionsFromConfig(cfg, outDir));
+  sim.writeOutput(output);
   const double tLoop = MPI_Wtime();
   while (!sim.finished()) {
     sim.step();
+    sim.writeOutput(output);
     series.record(sim);
     progress.update(sim, cfg.integer("run.steps"), cfg.number("run.end_time"));
   }

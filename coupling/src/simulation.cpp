@@ -29,6 +29,7 @@ Schema caseSchema() {
   fv::declareConfig(s);
   dem::declareConfig(s);
   declareConfig(s);
+  declareOutputConfig(s);
   return s;
 }
 
@@ -40,6 +41,7 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
     : cfg_(cfg), dec_(decompositionFromConfig(world, cfg)), mode_(runMode(cfg)) {
   ScopedPhase setup(timers_, Phase::Setup);
   maxSteps_ = cfg.integer("run.steps");
+  steadyTol_ = cfg.number("fluid.steady_tol");
   endTime_ = cfg.number("run.end_time");
   if (maxSteps_ == 0 && endTime_ <= 0)
     throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
@@ -74,11 +76,9 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
   sumDepositsAcrossBlocks();
   updateFluidCoefficients();
   auto& f = fluid_->fields();
-  forEach(layout.interior(), [&](int i, int j, int k) {
-    f.epsOld(i, j, k) = f.eps(i, j, k);
-    f.K(i, j, k) = 0.0;
-    for (int d = 0; d < 3; ++d) f.KUp[d](i, j, k) = 0.0;
-  });
+  f.K.fill(0.0);
+  for (auto& k : f.KUp) k.fill(0.0);
+  fluid_->syncEpsOld();
   refreshCellVelocity();
   fluid_->pressureGradient(gradP_);
   for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
@@ -87,6 +87,10 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
 Simulation::~Simulation() = default;
 
 bool Simulation::finished() const {
+  // A fluid-only run may stop at steady state (same verdict on every rank).
+  if (mode_ == RunMode::FluidOnly && steadyTol_ > 0 && steps_ > 1 &&
+      fluid_->steadyResidual() < steadyTol_)
+    return true;
   if (maxSteps_ > 0) return steps_ >= maxSteps_;
   return time_ >= endTime_ * (1.0 - 1e-12);
 }
@@ -318,6 +322,30 @@ void Simulation::handForcesToParticles() {
 void Simulation::advanceParticles(int n) {
   for (int s = 0; s < n; ++s) dem_->substep();
   substeps_ += n;
+}
+
+void Simulation::writeOutput(OutputWriter& out) {
+  if (!out.due(steps_)) return;
+  ScopedPhase t(timers_, Phase::Output);
+  if (fluid_ && out.options().fields) {
+    const auto& f = fluid_->fields();
+    if (!coupled_) {
+      // Fluid-only runs keep no cell-centred velocity; make it for the output.
+      if (uCell_[0].layout() != f.p.layout())
+        for (auto& u : uCell_) u = CellField(f.p.layout());
+      fluid_->cellVelocity(uCell_);
+    }
+    out.writeFields(steps_, time_,
+                    {OutputField::scalar("p", f.p), OutputField::vector("u", uCell_),
+                     OutputField::scalar("eps", f.eps), OutputField::scalar("K", f.K)});
+  }
+  if (dem_ && out.options().particles) {
+    const auto& p = dem_->particles();
+    const std::size_t n = p.nOwned;
+    out.writeParticles(steps_, time_, std::span<const std::int64_t>(p.id.data(), n),
+                       firstRows(p.x, n), firstRows(p.v, n), firstRows(p.omega, n),
+                       std::span<const double>(p.radius.data(), n));
+  }
 }
 
 Json Simulation::report(double wallSeconds) const {

@@ -46,6 +46,7 @@
 #include "coloc/fv/fluid.hpp"
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/halo.hpp"
+#include "coloc/partition/output.hpp"
 
 namespace coloc::coupling {
 
@@ -85,6 +86,10 @@ class Simulation {
   /// Total solid volume deposited on the cells (global, m^3) after the last deposit.
   double depositedSolidVolume() const { return solidVolume_; }
 
+  /// Fields (p, cell-centred u, eps, K) and particles (id, x, v, omega, radius, rank) to HDF5 +
+  /// XDMF when the writer says this step is due. Collective.
+  void writeOutput(OutputWriter& out);
+
   /// Report entries of the run (collective): throughput, exchange, fractions, checks, ...
   Json report(double wallSeconds) const;
 
@@ -113,7 +118,7 @@ class Simulation {
   // Coupling parameters.
   KernelKind kernel_ = KernelKind::Trilinear;
   DragLaw drag_ = DragLaw::DiFelice;
-  double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6;
+  double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6, steadyTol_ = 0;
   bool coupled_ = false;
 
   // Cell fields on the fluid's cell layout.
