@@ -21,7 +21,7 @@ struct TgvError {
   int itMax;
 };
 
-TgvError tgv(int n) {
+TgvError tgv(int n, const std::string& solver = "pfmg") {
   const double L = 2 * M_PI, h = L / n, nu = 0.02, tEnd = 1.0;
   const std::string text = R"({
     "run": {"mode": "fluid"},
@@ -31,7 +31,7 @@ TgvError tgv(int n) {
                "periodic": {"x": true, "y": true, "z": true}},
     "partition": {"dims": [0, 0, 1]},
     "fluid": {"nu": 0.02, "convection": "central", "adaptive_dt": true, "dt": 1.0, "cfl": 0.4,
-              "pressure": {"tol": 1e-10}}
+              "pressure": {"tol": 1e-10, "solver": ")" + solver + R"("}}
   })";
   const Config cfg = fvtest::config(text);
   const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
@@ -91,4 +91,12 @@ TEST(FvTaylorGreen, KineticEnergyDecaySecondOrder) {
     EXPECT_GE(pVel, 1.8);
   }
   EXPECT_LE(e[3].ke, 1e-2);  // relative to the decay 1 - e^{-4 nu t}: <= 1 % at 48 cells
+}
+
+// The SMG preconditioner (fluid.pressure.solver = smg) gives the same flow to the solver
+// tolerance.
+TEST(FvTaylorGreen, SmgSameAsPfmg) {
+  const TgvError a = tgv(16, "pfmg"), b = tgv(16, "smg");
+  EXPECT_NEAR(a.ke, b.ke, 1e-8);
+  EXPECT_NEAR(a.vel, b.vel, 1e-8);
 }
