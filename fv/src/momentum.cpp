@@ -20,16 +20,16 @@ inline double faceValue(double m, double a, double b, double c, double d) {
     const double up = m >= 0 ? b : c;
     const double dn = m >= 0 ? c : b;
     const double uu = m >= 0 ? a : d;
-    const double diff = dn - up;
-    if (diff == 0.0) return up;
-    const double r = (up - uu) / diff;
-    double psi;
+    // With da = u_U - u_UU, db = u_D - u_U and r = da/db: psi(r) db / 2 is
+    //   van Leer  da db / (da + db) when da db > 0, else 0
+    //   minmod    minmod(da, db) / 2
+    const double da = up - uu, db = dn - up;
+    if (da * db <= 0.0) return up;
     if constexpr (C == Convection::VanLeer) {
-      psi = (r + std::fabs(r)) / (1.0 + std::fabs(r));
+      return up + da * db / (da + db);
     } else {
-      psi = std::fmax(0.0, std::fmin(1.0, r));
+      return up + 0.5 * (std::fabs(da) < std::fabs(db) ? da : db);
     }
-    return up + 0.5 * psi * diff;
   }
 }
 
