@@ -61,6 +61,21 @@ void Comm::raiseIfAny(const std::string& localError) const {
   throw Error(msg);
 }
 
+void Comm::alltoall(const std::vector<int>& sendCounts, std::vector<int>& recvCounts) const {
+  recvCounts.resize(sendCounts.size());
+  MPI_Alltoall(sendCounts.data(), 1, MPI_INT, recvCounts.data(), 1, MPI_INT, comm_);
+}
+
+int Comm::displacements(const std::vector<int>& counts, std::vector<int>& displ) {
+  displ.resize(counts.size());
+  int total = 0;
+  for (std::size_t r = 0; r < counts.size(); ++r) {
+    displ[r] = total;
+    total += counts[r];
+  }
+  return total;
+}
+
 void Comm::waitAll(std::span<MPI_Request> reqs) {
   MPI_Waitall(static_cast<int>(reqs.size()), reqs.data(), MPI_STATUSES_IGNORE);
 }

@@ -13,12 +13,14 @@ double threadCpuSeconds() {
 
 void Timers::start(Phase p) {
   auto& s = slots_[idx(p)];
+  if (s.depth++ > 0) return;
   s.wall0 = MPI_Wtime();
   s.cpu0 = threadCpuSeconds();
 }
 
 void Timers::stop(Phase p) {
   auto& s = slots_[idx(p)];
+  if (--s.depth > 0) return;
   s.wall += MPI_Wtime() - s.wall0;
   s.cpu += threadCpuSeconds() - s.cpu0;
   ++s.calls;

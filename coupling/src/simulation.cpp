@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <limits>
 #include <sstream>
 
 #include "coloc/core/error.hpp"
@@ -38,7 +39,106 @@ constexpr double kPi = std::numbers::pi;
 }
 
 Simulation::Simulation(const Comm& world, const Config& cfg)
-    : cfg_(cfg), dec_(decompositionFromConfig(world, cfg)), mode_(runMode(cfg)) {
+    : Simulation(cfg, chooseLayouts(world, cfg)) {}
+
+namespace {
+
+/// Cost weights measured on the uniform blocks: busy seconds of the fluid phases per cell-step
+/// and of the particle and coupling phases per particle-step (summed over ranks).
+CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long steps) {
+  Layouts probe{uniform, std::nullopt, "uniform", CostModel{}, 1.0, 1.0};
+  Simulation sim(cfg, probe);
+  for (long long s = 0; s < steps; ++s) sim.step();
+  const Comm& comm = uniform.comm();
+  double fluid = 0, particles = 0;
+  for (std::size_t i = 0; i < kPhases.size(); ++i) {
+    const double b = sim.timers().busySeconds(static_cast<Phase>(i));
+    if (kPhases[i].category == Category::Fluid) fluid += b;
+    if (kPhases[i].category == Category::Particles || kPhases[i].category == Category::Coupling)
+      particles += b;
+  }
+  fluid = comm.sum(fluid);
+  particles = comm.sum(particles);
+  const double cells = static_cast<double>(uniform.grid().cellCount());
+  const double n = sim.particles() ? static_cast<double>(sim.particles()->globalCount()) : 0.0;
+  CostModel m;
+  m.perCell = fluid / (cells * static_cast<double>(steps));
+  m.perParticle = n > 0 ? particles / (n * static_cast<double>(steps)) : 0.0;
+  if (!(m.perCell > 0)) m.perCell = 1e-12;
+  return m;
+}
+
+}  // namespace
+
+Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
+  const std::string strategy = cfg.string("partition.strategy");
+  const Decomposition uniform = decompositionFromConfig(world, cfg);
+  Layouts L{uniform, std::nullopt, strategy, CostModel{}, 1.0, 1.0};
+  if (strategy == "uniform" || runMode(cfg) == RunMode::FluidOnly) return L;
+  const auto& g = uniform.grid();
+  const bool independent = strategy == "independent";
+  CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
+  if (independent) model = CostModel{0.0, 1.0};  // the DEM's blocks: balanced by particle count
+  else if (cfg.integer("partition.calibrate_steps") > 0)
+    model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
+  // Where the particles are: a DEM built on the uniform blocks, only to count them per cell.
+  std::vector<double> cost;
+  {
+    Timers scratch;
+    dem::DemSolver probe(uniform, cfg, scratch);
+    const auto& p = probe.particles();
+    const std::size_t n = p.nOwned;
+    cost = cellCosts(uniform, std::span<const double>(p.x[0].data(), n),
+                     std::span<const double>(p.x[1].data(), n),
+                     std::span<const double>(p.x[2].data(), n), model);
+  }
+  const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
+  const int minCells = 2;  // the fluid's ghost layers
+  const auto dimsKey = cfg.intVec3(independent ? "partition.dem_dims" : "partition.dims");
+  const Int3 fixed{static_cast<int>(dimsKey[0]), static_cast<int>(dimsKey[1]),
+                   static_cast<int>(dimsKey[2])};
+  BalancedLayout best;
+  if (independent && fixed == Int3{0, 0, 0}) {
+    // The baseline keeps its physics apart: prefer a process grid other than the fluid's.
+    best.maxBlockCost = std::numeric_limits<double>::infinity();
+    const int size = world.size();
+    for (int px = 1; px <= size; ++px)
+      for (int py = 1; py <= size / px; ++py) {
+        if (size % (px * py)) continue;
+        const Int3 dims{px, py, size / (px * py)};
+        if (dims == uniform.dims() && size > 1) continue;
+        try {
+          const auto l = balanceBlocks(g, cost, size, minCells, gran, dims);
+          if (l.maxBlockCost < best.maxBlockCost) best = l;
+        } catch (const ConfigError&) {
+        }
+      }
+    if (!std::isfinite(best.maxBlockCost)) best = balanceBlocks(g, cost, size, minCells, gran);
+  } else {
+    best = balanceBlocks(g, cost, world.size(), minCells, gran, fixed);
+  }
+  const Decomposition balanced = Decomposition::fromCuts(world, g, best.cuts);
+  if (independent) {
+    L.particles = balanced;
+    return L;
+  }
+  L.fluid = balanced;
+  L.model = model;
+  L.modelledImbalance = best.imbalance();
+  BalancedLayout uni;
+  uni.dims = uniform.dims();
+  uni.cuts = uniform.cuts();
+  evaluateLayout(g, cost, uni);
+  L.uniformImbalance = uni.imbalance();
+  return L;
+}
+
+Simulation::Simulation(const Config& cfg, Layouts layouts)
+    : cfg_(cfg),
+      layouts_(std::move(layouts)),
+      dec_(layouts_.fluid),
+      demDec_(layouts_.particles),
+      mode_(runMode(cfg)) {
   ScopedPhase setup(timers_, Phase::Setup);
   maxSteps_ = cfg.integer("run.steps");
   steadyTol_ = cfg.number("fluid.steady_tol");
@@ -47,7 +147,7 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
     throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
   if (mode_ != RunMode::ParticlesOnly) fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
   if (mode_ != RunMode::FluidOnly) {
-    dem_ = std::make_unique<dem::DemSolver>(dec_, cfg, timers_);
+    dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
     if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
   }
   coupled_ = mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem;
@@ -70,6 +170,7 @@ Simulation::Simulation(const Comm& world, const Config& cfg)
 
   // The initial porosity: deposit the particle volume once and start with eps^0 = eps^1 so the
   // first step sees no spurious d(eps)/dt.
+  gatherParticles();
   computeStencils();
   evaluateDrag(0.0);  // beta is not used yet (K starts at zero)
   depositParticles();
@@ -116,6 +217,7 @@ void Simulation::step() {
       if (nSub == 0)
         nSub = std::max<long long>(1, static_cast<long long>(std::floor(fluid_->nextDt() / dem_->dt() + 1e-9)));
       const double dt = static_cast<double>(nSub) * dem_->dt();
+      gatherParticles();
       computeStencils();
       sampleFluidForDrag();
       evaluateDrag(dt);
@@ -144,23 +246,150 @@ void Simulation::resizeParticleBuffers(std::size_t n) {
     for (auto* a : {&uAt_, &vDep_, &betaV_, &gradPAt_, &force_}) (*a)[d].resize(cap);
 }
 
-void Simulation::computeStencils() {
-  ScopedPhase t(timers_, Phase::CouplingDeposit);
+void Simulation::gatherParticles() {
   const auto& p = dem_->particles();
   const std::size_t n = p.nOwned;
+  if (!demDec_) {
+    // Co-located: the kernels read the DEM's own arrays; only the non-drag force is derived.
+    ScopedPhase t(timers_, Phase::CouplingDrag);
+    for (int d = 0; d < 3; ++d) {
+      if (nonDrag_[d].size() < n) nonDrag_[d].resize(n + n / 4);
+      for (std::size_t i = 0; i < n; ++i) nonDrag_[d][i] = p.f[d][i] - p.fExt[d][i];
+    }
+    view_.n = n;
+    for (int d = 0; d < 3; ++d) {
+      view_.x[d] = p.x[d].data();
+      view_.v[d] = p.v[d].data();
+      view_.nonDrag[d] = nonDrag_[d].data();
+    }
+    view_.radius = p.radius.data();
+    view_.mass = p.mass.data();
+    view_.id = p.id.data();
+    return;
+  }
+  // Independent: every particle's coupling data goes to the rank whose fluid block holds it.
+  ScopedPhase t(timers_, Phase::ExchangeRemote);
+  const double t0 = MPI_Wtime();
+  const Comm& comm = dec_.comm();
+  const int size = comm.size();
+  const auto& g = dec_.grid();
+  constexpr int kRow = 12;  // x3 v3 nonDrag3 radius mass id
+  auto& X = proxy_;
+  X.sendCounts.assign(static_cast<std::size_t>(size), 0);
+  if (X.dest.size() < n) X.dest.resize(n + n / 4);
+  if (X.order.size() < n) X.order.resize(n + n / 4);
+  std::string err;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int r = dec_.ownerOfPoint({p.x[0][i], p.x[1][i], p.x[2][i]});
+    if (r < 0 && err.empty()) err = "particle " + std::to_string(p.id[i]) + " is outside the box";
+    X.dest[i] = std::max(r, 0);
+    ++X.sendCounts[static_cast<std::size_t>(X.dest[i])];
+  }
+  comm.raiseIfAny(err);
+  Comm::displacements(X.sendCounts, X.sendDispl);
+  std::vector<int>& fill = X.recvDispl;  // scratch: next free row per destination
+  fill = X.sendDispl;
+  for (std::size_t i = 0; i < n; ++i) X.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(X.dest[i])]++)] = static_cast<int>(i);
+  if (X.sendBuf.size() < n * kRow) X.sendBuf.resize(n * kRow + n * kRow / 4);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(X.order[k]);
+    double* row = X.sendBuf.data() + k * kRow;
+    for (int d = 0; d < 3; ++d) {
+      double xd = p.x[d][i];
+      if (g.periodic[d]) {  // wrap into the box: the fluid owner's block frame
+        xd = g.origin[d] + std::fmod(xd - g.origin[d], g.length[d]);
+        if (xd < g.origin[d]) xd += g.length[d];
+      }
+      row[d] = xd;
+      row[3 + d] = p.v[d][i];
+      row[6 + d] = p.f[d][i] - p.fExt[d][i];
+    }
+    row[9] = p.radius[i];
+    row[10] = p.mass[i];
+    row[11] = static_cast<double>(p.id[i]);
+  }
+  comm.alltoall(X.sendCounts, X.recvCounts);
+  for (auto& c : X.sendCounts) c *= kRow;
+  for (auto& c : X.recvCounts) c *= kRow;
+  Comm::displacements(X.sendCounts, X.sendDispl);
+  const int recvTotal = Comm::displacements(X.recvCounts, X.recvDispl);
+  if (X.recvBuf.size() < static_cast<std::size_t>(recvTotal)) X.recvBuf.resize(static_cast<std::size_t>(recvTotal) + recvTotal / 4);
+  comm.alltoallv(std::span<const double>(X.sendBuf.data(), n * kRow), X.sendCounts, X.sendDispl,
+                 std::span<double>(X.recvBuf.data(), static_cast<std::size_t>(recvTotal)),
+                 X.recvCounts, X.recvDispl);
+  const std::size_t m = static_cast<std::size_t>(recvTotal / kRow);
+  if (X.radius.size() < m) {
+    const std::size_t cap = m + m / 4;
+    for (int d = 0; d < 3; ++d) {
+      X.x[d].resize(cap);
+      X.v[d].resize(cap);
+      X.nonDrag[d].resize(cap);
+    }
+    X.radius.resize(cap);
+    X.mass.resize(cap);
+    X.id.resize(cap);
+  }
+  for (std::size_t k = 0; k < m; ++k) {
+    const double* row = X.recvBuf.data() + k * kRow;
+    for (int d = 0; d < 3; ++d) {
+      X.x[d][k] = row[d];
+      X.v[d][k] = row[3 + d];
+      X.nonDrag[d][k] = row[6 + d];
+    }
+    X.radius[k] = row[9];
+    X.mass[k] = row[10];
+    X.id[k] = static_cast<std::int64_t>(row[11]);
+  }
+  view_.n = m;
+  for (int d = 0; d < 3; ++d) {
+    view_.x[d] = X.x[d].data();
+    view_.v[d] = X.v[d].data();
+    view_.nonDrag[d] = X.nonDrag[d].data();
+  }
+  view_.radius = X.radius.data();
+  view_.mass = X.mass.data();
+  view_.id = X.id.data();
+  bookProxyTraffic(kRow, MPI_Wtime() - t0);
+}
+
+void Simulation::bookProxyTraffic(int valuesPerParticle, double seconds) {
+  // Rows to other ranks are messages; the rows a rank keeps for itself move in memory.
+  const auto& X = proxy_;
+  const int me = dec_.comm().rank();
+  long long remote = 0, local = 0, messages = 0;
+  for (std::size_t r = 0; r < X.sendCounts.size(); ++r) {
+    const long long bytes = static_cast<long long>(X.sendCounts[r]) * static_cast<long long>(sizeof(double));
+    if (static_cast<int>(r) == me) {
+      local += bytes;
+    } else if (bytes > 0) {
+      remote += bytes;
+      ++messages;
+    }
+  }
+  (void)valuesPerParticle;
+  timers_.book(Exchange::InterPhysicsRemote, remote, messages, seconds);
+  timers_.book(Exchange::InterPhysicsLocal, local, 0);
+}
+
+void Simulation::computeStencils() {
+  ScopedPhase t(timers_, Phase::CouplingDeposit);
+  const std::size_t n = view_.n;
   resizeParticleBuffers(n);
-  const long long bad = stencils_.compute(kernel_, dec_, solid_.layout(), p.x[0], p.x[1], p.x[2], n);
+  const long long bad = stencils_.compute(
+      kernel_, dec_, solid_.layout(), std::span<const double>(view_.x[0], n),
+      std::span<const double>(view_.x[1], n), std::span<const double>(view_.x[2], n), n);
   std::string err;
   if (bad >= 0) {
     const auto i = static_cast<std::size_t>(bad);
     std::ostringstream os;
-    os << "particle " << p.id[i] << " at (" << p.x[0][i] << ", " << p.x[1][i] << ", " << p.x[2][i]
+    os << "particle " << view_.id[i] << " at (" << view_.x[0][i] << ", " << view_.x[1][i] << ", "
+       << view_.x[2][i]
        << ") is more than one cell outside its block: it cannot be coupled (check particles.skin "
           "and the time step)";
     err = os.str();
   }
   dec_.comm().raiseIfAny(err);
-  for (std::size_t i = 0; i < n; ++i) volume_[i] = 4.0 / 3.0 * kPi * std::pow(p.radius[i], 3);
+  for (std::size_t i = 0; i < n; ++i) volume_[i] = 4.0 / 3.0 * kPi * std::pow(view_.radius[i], 3);
 }
 
 void Simulation::sampleFluidForDrag() {
@@ -174,7 +403,7 @@ void Simulation::sampleFluidForDrag() {
 
 void Simulation::evaluateDrag(double dt) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
-  const auto& p = dem_->particles();
+  const ParticleView& p = view_;
   const std::size_t n = stencils_.count();
   const bool frozen = mode_ == RunMode::DummyDem;
   for (std::size_t i = 0; i < n; ++i) {
@@ -197,7 +426,7 @@ void Simulation::evaluateDrag(double dt) {
       const double m = p.mass[i];
       beta_[i] = beta / (1.0 + dt * beta / m);
       for (int d = 0; d < 3; ++d) {
-        const double nonDrag = p.f[d][i] - p.fExt[d][i] - volume_[i] * rhoF_ * gradPAt_[d][i];
+        const double nonDrag = p.nonDrag[d][i] - volume_[i] * rhoF_ * gradPAt_[d][i];
         vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
       }
     }
@@ -312,11 +541,39 @@ void Simulation::applyCouplingForces(double dt) {
 }
 
 void Simulation::handForcesToParticles() {
-  ScopedPhase t(timers_, Phase::ExchangeLocal);
   auto& p = dem_->particles();
-  const std::size_t n = stencils_.count();
-  for (int d = 0; d < 3; ++d) std::copy_n(force_[d].data(), n, p.fExt[d].data());
-  timers_.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n * sizeof(double)), 0);
+  if (!demDec_) {
+    ScopedPhase t(timers_, Phase::ExchangeLocal);
+    const std::size_t n = stencils_.count();
+    for (int d = 0; d < 3; ++d) std::copy_n(force_[d].data(), n, p.fExt[d].data());
+    timers_.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n * sizeof(double)), 0);
+    return;
+  }
+  // Independent: the forces travel back to the DEM ranks, in the order the rows came.
+  ScopedPhase t(timers_, Phase::ExchangeRemote);
+  const double t0 = MPI_Wtime();
+  auto& X = proxy_;
+  const Comm& comm = dec_.comm();
+  constexpr int kRow = 12;
+  const std::size_t m = view_.n;
+  // Proxy k's force goes back to where its row came from: swap the roles of the counts.
+  for (auto& c : X.recvCounts) c = c / kRow * 3;
+  for (auto& c : X.sendCounts) c = c / kRow * 3;
+  Comm::displacements(X.recvCounts, X.recvDispl);
+  Comm::displacements(X.sendCounts, X.sendDispl);
+  for (std::size_t k = 0; k < m; ++k)
+    for (int d = 0; d < 3; ++d) X.recvBuf[3 * k + static_cast<std::size_t>(d)] = force_[d][k];
+  const std::size_t n = p.nOwned;
+  comm.alltoallv(std::span<const double>(X.recvBuf.data(), 3 * m), X.recvCounts, X.recvDispl,
+                 std::span<double>(X.sendBuf.data(), 3 * n), X.sendCounts, X.sendDispl);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(X.order[k]);
+    for (int d = 0; d < 3; ++d) p.fExt[d][i] = X.sendBuf[3 * k + static_cast<std::size_t>(d)];
+  }
+  // Book what this rank sent back (its proxies' forces), by destination.
+  std::swap(X.sendCounts, X.recvCounts);
+  bookProxyTraffic(3, MPI_Wtime() - t0);
+  std::swap(X.sendCounts, X.recvCounts);
 }
 
 void Simulation::advanceParticles(int n) {
@@ -383,6 +640,17 @@ Json Simulation::report(double wallSeconds) const {
         out[k] = v;
     }
   }
+  const auto dimsJson = [](const Decomposition& d) {
+    return Json::array({d.dims()[0], d.dims()[1], d.dims()[2]});
+  };
+  out["partition"] = {{"strategy", layouts_.strategy},
+                      {"fluid_dims", dimsJson(dec_)},
+                      {"particle_dims", dimsJson(particleDecomposition())}};
+  if (layouts_.strategy == "balanced")
+    out["partition"]["balanced"] = {{"cost_per_cell", layouts_.model.perCell},
+                                    {"cost_per_particle", layouts_.model.perParticle},
+                                    {"modelled_imbalance", layouts_.modelledImbalance},
+                                    {"uniform_modelled_imbalance", layouts_.uniformImbalance}};
   if (coupled_) out["coupling"] = {{"solid_volume", solidVolume_},
                                    {"kernel", kernel_ == KernelKind::Centroid ? "centroid" : "trilinear"},
                                    {"drag", dragLawName(drag_)}};

@@ -10,7 +10,20 @@ void declareDomainConfig(Schema& s) {
   s.boolean("domain.periodic.y", false, "periodic along y");
   s.boolean("domain.periodic.z", false, "periodic along z");
   s.string("partition.strategy", "uniform",
-           "uniform: even Cartesian blocks shared by fluid and particles", {"uniform"});
+           "uniform: even Cartesian blocks shared by fluid and particles; balanced: one Cartesian "
+           "grid for both, cuts placed by the cost model partition.cost.*; independent: the "
+           "baseline, the DEM on its own blocks and every fluid-particle transfer by MPI",
+           {"uniform", "balanced", "independent"});
+  s.number("partition.cost.cell", 1.0, "balanced: modelled cost of a cell per step",
+           Range::nonNegative());
+  s.number("partition.cost.particle", 2.0, "balanced: modelled cost of a particle per step",
+           Range::nonNegative());
+  s.integer("partition.calibrate_steps", 0,
+            "balanced: measure the two costs over this many steps on uniform blocks first "
+            "(0: use partition.cost.*)", Range::nonNegative());
+  s.intVec3("partition.dem_dims", std::array<long long, 3>{0, 0, 0},
+            "independent: the DEM's process grid (0: balanced by particle count on a grid other "
+            "than the fluid's)", Range::nonNegative());
   s.intVec3("partition.dims", std::array<long long, 3>{0, 0, 0},
             "process grid; 0 along an axis lets MPI_Dims_create choose", Range::nonNegative());
 }

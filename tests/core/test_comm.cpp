@@ -47,3 +47,17 @@ TEST(Timers, ReportHasEveryTimedPhaseAndTheExchangeKinds) {
   EXPECT_TRUE(j["fractions"].contains("inter_physics"));
   EXPECT_GT(coloc::peakRssBytes(), 0);
 }
+
+TEST(Timers, NestedStartsOfOnePhaseCountOnce) {
+  coloc::Timers t;
+  t.start(coloc::Phase::Setup);
+  t.start(coloc::Phase::Setup);  // e.g. a solver timing its own set-up inside the driver's
+  const double t0 = MPI_Wtime();
+  while (MPI_Wtime() - t0 < 0.01) {
+  }
+  t.stop(coloc::Phase::Setup);
+  t.stop(coloc::Phase::Setup);
+  EXPECT_EQ(t.calls(coloc::Phase::Setup), 1);
+  EXPECT_LT(t.seconds(coloc::Phase::Setup), 0.015 + 0.5);
+  EXPECT_GE(t.seconds(coloc::Phase::Setup), 0.01);
+}

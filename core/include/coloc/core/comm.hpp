@@ -111,6 +111,21 @@ class Comm {
   }
   static void waitAll(std::span<MPI_Request> reqs);
 
+  /// All-to-all of one count per rank (counts.size() == size()).
+  void alltoall(const std::vector<int>& sendCounts, std::vector<int>& recvCounts) const;
+  /// All-to-all of variable blocks: sendCounts[r] values starting at sendDispl[r] go to rank r;
+  /// the block from rank r lands at recvDispl[r] (counts from alltoall(), displacements from
+  /// displacements()). The caller owns every buffer, so nothing is allocated here.
+  template <class T>
+  void alltoallv(std::span<const T> send, const std::vector<int>& sendCounts,
+                 const std::vector<int>& sendDispl, std::span<T> recv,
+                 const std::vector<int>& recvCounts, const std::vector<int>& recvDispl) const {
+    MPI_Alltoallv(send.data(), sendCounts.data(), sendDispl.data(), mpiType<T>(), recv.data(),
+                  recvCounts.data(), recvDispl.data(), mpiType<T>(), comm_);
+  }
+  /// Exclusive prefix sum of counts into displ (resized to counts.size()); returns the total.
+  static int displacements(const std::vector<int>& counts, std::vector<int>& displ);
+
   /// Exchange counts with a peer (returns the count received); used to size variable messages.
   int exchangeCount(int sendCount, int dest, int src, int tag) const;
 

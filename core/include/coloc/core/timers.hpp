@@ -104,6 +104,7 @@ class Timers {
   struct Slot {
     double wall = 0, cpu = 0, wall0 = 0, cpu0 = 0;
     long long calls = 0;
+    int depth = 0;  // a phase started inside itself counts once (the outermost interval)
   };
   struct Ledger {
     long long bytes = 0, messages = 0;

@@ -17,6 +17,16 @@
 //   handForcesToParticles()      forces -> the DEM's external force array    (inter-physics, local)
 //   advanceParticles()           n_sub DEM sub-steps                         (particles)
 //
+// Partition strategies (partition.strategy):
+//   uniform      one even Cartesian decomposition for both physics (co-located);
+//   balanced     one Cartesian decomposition for both, cuts placed by a cell/particle cost model
+//                (partition/balance.hpp), still co-located by construction;
+//   independent  the baseline the paper argues against (SediFoam-like): the DEM has its own
+//                blocks (balanced by particle count, or partition.dem_dims), and every particle's
+//                coupling data travels by MPI to the rank owning its cell and the force comes back
+//                the same way (gatherParticles / handForcesToParticles): all of it is booked as
+//                inter-physics remote exchange. Same physics, same answers to round-off.
+//
 // Co-location makes the kernels read the fluid's arrays and the particle arrays of the same rank
 // directly: the deposition and interpolation are coupling arithmetic (SPEC section 4), and the
 // only data that moves between the two physics is the reverse halo sum of the deposited fields
@@ -35,6 +45,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "coloc/core/config.hpp"
@@ -44,6 +55,7 @@
 #include "coloc/coupling/kernel.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
+#include "coloc/partition/balance.hpp"
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/halo.hpp"
 #include "coloc/partition/output.hpp"
@@ -55,9 +67,23 @@ void declareConfig(Schema& s);
 /// The schema of a whole case file: run, domain, partition, fluid, particles, coupling.
 Schema caseSchema();
 
+/// The blocks of the two physics chosen by partition.strategy.
+struct Layouts {
+  Decomposition fluid;
+  std::optional<Decomposition> particles;  // set only in independent mode
+  std::string strategy = "uniform";
+  CostModel model;                         // balanced: the weights used
+  double modelledImbalance = 1.0;          // balanced: max/avg modelled block cost
+  double uniformImbalance = 1.0;           // balanced: the same for the uniform blocks
+};
+
 class Simulation {
  public:
   Simulation(const Comm& world, const Config& cfg);
+  /// With explicit blocks (tests, calibration runs).
+  Simulation(const Config& cfg, Layouts layouts);
+  /// The blocks partition.strategy asks for (may build temporary solvers to see the particles).
+  static Layouts chooseLayouts(const Comm& world, const Config& cfg);
   ~Simulation();
 
   /// One coupling step (what it advances depends on run.mode).
@@ -70,6 +96,9 @@ class Simulation {
   long long demSubsteps() const { return substeps_; }
   double lastDt() const { return lastDt_; }
   const Decomposition& decomposition() const { return dec_; }
+  /// The DEM's blocks: the same as decomposition() unless partition.strategy is independent.
+  const Decomposition& particleDecomposition() const { return demDec_ ? *demDec_ : dec_; }
+  bool independent() const { return demDec_.has_value(); }
   Timers& timers() { return timers_; }
   fv::FluidSolver* fluid() { return fluid_.get(); }
   dem::DemSolver* particles() { return dem_.get(); }
@@ -94,6 +123,7 @@ class Simulation {
   Json report(double wallSeconds) const;
 
  private:
+  void gatherParticles();
   void computeStencils();
   void sampleFluidForDrag();
   void evaluateDrag(double dt);
@@ -104,12 +134,33 @@ class Simulation {
   void sampleFluidForForces();
   void applyCouplingForces(double dt);
   void handForcesToParticles();
+  void bookProxyTraffic(int valuesPerParticle, double seconds);
   void advanceParticles(int n);
   void refreshCellVelocity();
   void resizeParticleBuffers(std::size_t n);
 
+  /// What the coupling kernels see of the particles: the DEM's own arrays (co-located) or the
+  /// proxies received from the DEM ranks (independent).
+  struct ParticleView {
+    std::size_t n = 0;
+    std::array<const double*, 3> x{}, v{}, nonDrag{};
+    const double* radius = nullptr;
+    const double* mass = nullptr;
+    const std::int64_t* id = nullptr;
+  };
+  /// Independent mode: where each DEM particle's coupling data went, and the buffers.
+  struct ProxyExchange {
+    std::vector<int> sendCounts, sendDispl, recvCounts, recvDispl, dest, order;
+    std::vector<double> sendBuf, recvBuf;
+    std::array<std::vector<double>, 3> x, v, nonDrag;
+    std::vector<double> radius, mass;
+    std::vector<std::int64_t> id;
+  };
+
   const Config& cfg_;
+  Layouts layouts_;
   Decomposition dec_;
+  std::optional<Decomposition> demDec_;
   Timers timers_;
   RunMode mode_;
   std::unique_ptr<fv::FluidSolver> fluid_;
@@ -127,9 +178,11 @@ class Simulation {
   HaloPlan halo_;
   Stencils stencils_;
 
-  // Per-particle buffers (owned particles; grow-only).
+  // Per-particle buffers (the particles of the view; grow-only).
+  ParticleView view_;
+  ProxyExchange proxy_;
   std::vector<double> volume_, beta_, epsAt_;
-  std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_, force_;
+  std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_, force_, nonDrag_;
 
   double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
