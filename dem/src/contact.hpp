@@ -41,6 +41,7 @@ struct PairCoeff {
   double dampH = 0;    // -2 sqrt(5/6) beta  (Hertz)
   double dampL = 0;    // -2 beta            (linear)
   double mu = 0, muR = 0;
+  double tOverN = 0;      // sqrt(S_t/S_n) = sqrt(4 G*/E*): gamma_t = tOverN * gamma_n (Hertz)
   double kn = 0, kt = 0;  // linear model
   double restitution = 1;
 };
@@ -55,6 +56,7 @@ inline PairCoeff mix(const Material& a, const Material& b, double linKn, double 
   c.Estar = 1.0 / ((1 - a.poisson * a.poisson) / a.young + (1 - b.poisson * b.poisson) / b.young);
   c.Gstar = 1.0 / (2 * (2 - a.poisson) * (1 + a.poisson) / a.young +
                    2 * (2 - b.poisson) * (1 + b.poisson) / b.young);
+  c.tOverN = std::sqrt(4.0 * c.Gstar / c.Estar);
   c.restitution = 0.5 * (a.restitution + b.restitution);
   const double beta = betaOf(c.restitution);
   c.dampH = -2.0 * std::sqrt(5.0 / 6.0) * beta;
@@ -90,7 +92,7 @@ inline double contactForce(const PairCoeff& c, double dt, bool update, const dou
     kn = (2.0 / 3.0) * Sn;
     kt = St;
     gn = c.dampH * std::sqrt(Sn * meff);
-    gt = c.dampH * std::sqrt(St * meff);
+    gt = c.tOverN * gn;  // = dampH sqrt(S_t m*), one square root fewer
   } else {
     kn = c.kn;
     kt = c.kt;
