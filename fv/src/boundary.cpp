@@ -1,5 +1,7 @@
 #include "boundary.hpp"
 
+#include <algorithm>
+
 namespace coloc::fv {
 
 namespace {
@@ -39,6 +41,7 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
       } else if (type == "inlet") {
         f.type = BcType::Inlet;
         for (int e = 0; e < 3; ++e) f.velocity[e] = j.at("velocity")[e].get<double>();
+        f.superficial = j.at("superficial").get<bool>();
       } else if (type == "outlet") {
         f.type = BcType::Outlet;
         f.pressure = j.at("pressure").get<double>();
@@ -66,7 +69,8 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
   return bc;
 }
 
-void applyVelocityBc(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u) {
+void applyVelocityBc(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u,
+                     const Field3<double>* eps) {
   const int g = u.layout().ghost;
   for (int b = 0; b < 3; ++b) {
     const int n = u.layout().n[b];
@@ -77,7 +81,28 @@ void applyVelocityBc(const Decomposition& dec, const BoxBc& bc, int c, Field3<do
         // Normal component: boundary face 0 (low) or n (high), ghosts beyond it.
         const int face = s == 0 ? 0 : n;
         const int dir = s == 0 ? -1 : 1;
-        if (f.type != BcType::Outlet) {
+        if (f.type == BcType::Inlet && f.superficial && eps) {
+          // The inlet velocity is superficial (a volume flux per area): the face carries
+          // u = U / eps of the adjacent cell, so that eps u = U whatever the bed touching it.
+          IndexBox layer = u.allocated();
+          layer.lo[b] = face;
+          layer.hi[b] = face + 1;
+          const IndexBox cells = eps->allocated();
+          const double U = f.velocity[b];
+          forEach(layer, [&](int i, int j, int k) {
+            int ci[3] = {i, j, k};
+            for (int a = 0; a < 3; ++a) ci[a] = std::clamp(ci[a], cells.lo[a], cells.hi[a] - 1);
+            ci[b] = s == 0 ? 0 : n - 1;
+            const double un = U / (*eps)(ci[0], ci[1], ci[2]);
+            u(i, j, k) = un;
+            for (int m = 1; m <= g; ++m) {
+              int out[3] = {i, j, k}, in[3] = {i, j, k};
+              out[b] = face + dir * m;
+              in[b] = face - dir * m;
+              u(out[0], out[1], out[2]) = 2.0 * un - u(in[0], in[1], in[2]);
+            }
+          });
+        } else if (f.type != BcType::Outlet) {
           const double un = f.type == BcType::Inlet ? f.velocity[b] : 0.0;
           forLayer(u, b, face, face, [&](double& dst, double&) { dst = un; });
           for (int m = 1; m <= g; ++m) {

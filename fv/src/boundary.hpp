@@ -1,7 +1,10 @@
 // fv/src/boundary.hpp — boundary conditions of the box faces (private).
 //
 // Per face of the box one of:
-//   inlet   u = U (given vector): Dirichlet velocity, dp/dn = 0
+//   inlet   u = U (given vector): Dirichlet velocity, dp/dn = 0; with "superficial": true the
+//           normal U is a volume flux per area and the face gets U / eps of the adjacent cell
+//           (the inflow is U A whatever the porosity of the first cell, e.g. a bed resting on
+//           the inlet; with eps = 1 there both are the same)
 //   outlet  p = p_out: Dirichlet pressure at the face, du/dn = 0 (the outlet-face normal velocity
 //           is extrapolated in the predictor and then corrected by the pressure gradient over the
 //           half cell, so continuity holds in the last cell to solver tolerance)
@@ -28,6 +31,7 @@ enum class BcType { Periodic, Inlet, Outlet, Wall, Slip };
 struct FaceBc {
   BcType type = BcType::Wall;
   Real3 velocity{0, 0, 0};  // inlet velocity, or wall velocity
+  bool superficial = false;  // inlet: velocity is a volume flux per area (u = U / eps)
   double pressure = 0;      // outlet kinematic pressure
 };
 
@@ -39,7 +43,10 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid);
 
 /// Fill the ghosts of face component c at the physical faces of this block (over the whole
 /// allocated range of the other axes), and set the boundary-face normal values of Dirichlet faces.
-void applyVelocityBc(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u);
+/// `eps` (the cell fluid fraction, ghosts included): for a superficial inlet the face gets
+/// U / eps of the adjacent cell; nullptr: eps = 1.
+void applyVelocityBc(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u,
+                     const Field3<double>* eps = nullptr);
 /// Zero-gradient (mirror) ghosts of a cell field at the physical faces of this block.
 void applyScalarBc(const Decomposition& dec, Field3<double>& f);
 

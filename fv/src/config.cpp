@@ -10,6 +10,10 @@ std::map<std::string, Schema> boundaryTypes() {
   t["periodic"] = Schema();
   Schema inlet;
   inlet.vec3("velocity", std::nullopt, "inlet velocity vector (m/s)");
+  inlet.boolean("superficial", false,
+                "the normal velocity is superficial (volume flux per area): the face gets "
+                "U / eps of the adjacent cell, e.g. a fluidised bed resting on the inlet; "
+                "false: Dirichlet on the interstitial velocity u (SPEC section 1)");
   t["inlet"] = inlet;
   Schema outlet;
   outlet.number("pressure", 0.0, "outlet kinematic pressure p/rho_f (m^2/s^2)");

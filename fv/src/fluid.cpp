@@ -156,7 +156,7 @@ void FluidSolver::Impl::fillGhosts() {
     for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
   }
   ScopedPhase t(timers, Phase::FluidBoundary);
-  for (int c = 0; c < 3; ++c) applyVelocityBc(dec, bc, c, f.u[c]);
+  for (int c = 0; c < 3; ++c) applyVelocityBc(dec, bc, c, f.u[c], &f.eps);
   uGhostsFresh = true;
 }
 
