@@ -50,7 +50,8 @@ Json Timers::report(const Comm& comm, double stepWallSeconds) const {
     const long long calls = comm.max(s.calls);
     catAvg[static_cast<std::size_t>(kPhases[i].category)] += w.avg;
     const auto cat = kPhases[i].category;
-    if (cat == Category::Fluid || cat == Category::Particles || cat == Category::Coupling)
+    if ((cat == Category::Fluid || cat == Category::Particles || cat == Category::Coupling) &&
+        kPhases[i].compute)
       busyComputeLocal += s.cpu;
     if (calls == 0) continue;
     timers[std::string(kPhases[i].name)] = {{"min", w.min},         {"avg", w.avg},

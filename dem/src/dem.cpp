@@ -129,7 +129,7 @@ struct DemSolver::Impl {
 
   // setup
   void readMaterials(const Config& cfg);
-  void setupBins(const Config& cfg, double dmax, bool any);
+  void setupBins(const Config& cfg, double dmax, long long total);
   void checkTimeStep();
   void addParticle(const detail::NewParticle& q);
   long long gbinRaw(double x, int d) const {
@@ -202,7 +202,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
   for (int k = 0; k < 3; ++k)
     wallOn[k] = {wallsOn && !grid.periodic[k] && dec.atLowBoundary(k),
                  wallsOn && !grid.periodic[k] && dec.atHighBoundary(k)};
-  setupBins(cfg, dmax, total > 0);
+  setupBins(cfg, dmax, total);
 
   detail::generate(
       cfg, info, lo, hi, [this](const double* x) { return owns(x); },
@@ -246,8 +246,14 @@ void DemSolver::Impl::readMaterials(const Config& cfg) {
   }
 }
 
-void DemSolver::Impl::setupBins(const Config& cfg, double dmax, bool any) {
+void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total) {
+  const bool any = total > 0;
   const auto& grid = dec.grid();
+  // Automatic split of large cells: bins near the interaction range, but never (much) more
+  // bins than particles: a few spheres in big cells must not allocate split^3 bins per cell.
+  const double perCell = static_cast<double>(total) / static_cast<double>(grid.cellCount());
+  const long long splitCap =
+      std::max(1LL, static_cast<long long>(std::floor(std::cbrt(std::max(1.0, 8.0 * perCell)))));
   const long long kc = cfg.integer("particles.bin_cells");
   const long long ks = cfg.integer("particles.bin_split");
   if (kc > 0 && ks > 0)
@@ -281,7 +287,9 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, bool any) {
     } else {
       key = "particles.bin_cells";
       if (h >= rc) {
-        split = rc > 0 ? std::clamp(static_cast<long long>(std::floor(h / rc)), 1LL, 64LL) : 1;
+        split = rc > 0 ? std::clamp(static_cast<long long>(std::floor(h / rc)), 1LL,
+                                    std::min(64LL, splitCap))
+                       : 1;
       } else {
         multiple = static_cast<long long>(std::ceil(rc / h));
         while (multiple <= grid.cells[d] && (!divides(multiple) || multiple * h < rc)) ++multiple;

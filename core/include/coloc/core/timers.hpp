@@ -46,13 +46,14 @@ enum class Phase : std::uint8_t {
 struct PhaseInfo {
   std::string_view name;
   Category category;
+  bool compute = true;  // counted in the busy time (load.*): false for phases that mostly wait
 };
 
 inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> kPhases = {{
     {"setup", Category::Setup},
     {"fluid_momentum", Category::Fluid},
     {"fluid_boundary", Category::Fluid},
-    {"fluid_halo", Category::Fluid},
+    {"fluid_halo", Category::Fluid, false},
     {"fluid_pressure_assemble", Category::Fluid},
     {"fluid_pressure_solve", Category::Fluid},
     {"fluid_project", Category::Fluid},
@@ -60,13 +61,13 @@ inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> k
     {"dem_neighbor", Category::Particles},
     {"dem_force", Category::Particles},
     {"dem_integrate", Category::Particles},
-    {"dem_ghost", Category::Particles},
-    {"dem_migrate", Category::Particles},
+    {"dem_ghost", Category::Particles, false},
+    {"dem_migrate", Category::Particles, false},
     {"coupling_deposit", Category::Coupling},
     {"coupling_interpolate", Category::Coupling},
     {"coupling_drag", Category::Coupling},
-    {"exchange_local", Category::InterPhysics},
-    {"exchange_remote", Category::InterPhysics},
+    {"exchange_local", Category::InterPhysics, false},
+    {"exchange_remote", Category::InterPhysics, false},
     {"output", Category::Output},
     {"checkpoint", Category::Output},
 }};
