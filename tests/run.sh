@@ -1,11 +1,22 @@
 #!/usr/bin/env bash
-# tests/run.sh — install what is missing, build, and run every test through CTest.
-# Extra arguments go to ctest (e.g. -L validation, -R halo).
+# tests/run.sh — install what is missing, build, and run every test through CTest; then the
+# unit, MPI and I/O tests again under AddressSanitizer + UndefinedBehaviorSanitizer (a second
+# build in build-sanitize; COLOC_SANITIZE=0 skips it).
+# Extra arguments go to the first ctest run (e.g. -L validation, -R halo).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${COLOC_BUILD_DIR:-$root/build}
 "$root/cmake/setup.sh" "$build"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none
-cd "$build"
-ctest --output-on-failure -j "$(nproc)" "$@"
+(cd "$build" && ctest --output-on-failure -j "$(nproc)" "$@")
+
+if [[ ${COLOC_SANITIZE:-1} != 0 && $# -eq 0 ]]; then
+  sbuild=$root/build-sanitize
+  echo "tests/run.sh: unit, mpi and io tests under AddressSanitizer + UBSan ($sbuild)"
+  "$root/cmake/setup.sh" "$sbuild" -DCOLOC_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCOLOC_BUILD_BENCHMARKS=OFF
+  # Open MPI's own allocations are reported as leaks at exit: leak checking is off.
+  export ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  (cd "$sbuild" && ctest --output-on-failure -j "$(nproc)" -L '^(unit|mpi|io)$')
+fi
