@@ -631,15 +631,7 @@ Json Simulation::report(double wallSeconds) const {
         out[k] = v;
     }
   }
-  if (dem_) {
-    const Json pd = dem_->diagnostics();
-    for (auto& [k, v] : pd.items()) {
-      if (out.contains(k) && out[k].is_object() && v.is_object())
-        for (auto& [k2, v2] : v.items()) out[k][k2] = v2;
-      else
-        out[k] = v;
-    }
-  }
+  if (dem_) out["particles"] = dem_->diagnostics();
   const auto dimsJson = [](const Decomposition& d) {
     return Json::array({d.dims()[0], d.dims()[1], d.dims()[2]});
   };
