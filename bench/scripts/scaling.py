@@ -39,7 +39,9 @@ def run_point(args, n, mode, rep):
     for s in args.set:
         cmd += ["--set", s]
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
+               OMPI_MCA_rmaps_base_oversubscribe="1",
+               OMPI_MCA_btl_vader_single_copy_mechanism=os.environ.get(
+                   "OMPI_MCA_btl_vader_single_copy_mechanism", "none"))
     print("scaling:", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, env=env)
     with open(os.path.join(out, "report.json")) as f:
@@ -81,51 +83,85 @@ def best(rows, mode):
     return [out[n] for n in sorted(out)]
 
 
+COUPLED_MODES = (("coupled", "o-"), ("dummy_dem", "d-."))
+
+
+def shade_oversubscribed(ax, rows, cores):
+    """Grey band and a label over the rank counts beyond this machine's cores."""
+    over = sorted({r["ranks"] for r in rows if r["oversubscribed"]})
+    if not over:
+        return
+    ax.axvspan(cores + 0.5, max(over) + 0.5, color="0.88", zorder=0)
+    ax.text(cores + 0.55, 0.97, f"oversubscribed\n(> {cores} cores)", transform=ax.get_xaxis_transform(),
+            va="top", ha="left", fontsize=8, color="0.3")
+
+
 def plot(rows, args, cores):
     name = os.path.basename(args.case).replace(".json", "")
-    note = f" (ranks > {cores} oversubscribed on this machine)" if any(r["oversubscribed"] for r in rows) else ""
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    for mode, style in (("coupled", "o-"), ("fluid", "s--"), ("particles", "^:"), ("dummy_dem", "d-.")):
+    note = f"\n(ranks > {cores} oversubscribed on this {cores}-core machine)" \
+        if any(r["oversubscribed"] for r in rows) else ""
+    ns = sorted({r["ranks"] for r in rows})
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for mode, style in (("coupled", "o-"), ("dummy_dem", "d-."), ("fluid", "s--"), ("particles", "^:")):
         pts = best(rows, mode)
         if not pts:
             continue
         base = pts[0]["s_per_step"] * pts[0]["ranks"]
-        ax.plot([p["ranks"] for p in pts], [base / p["s_per_step"] for p in pts], style, label=mode)
-    ns = sorted({r["ranks"] for r in rows})
+        label = {"fluid": "fluid only (CFD)", "particles": "particles only (DEM)",
+                 "dummy_dem": "coupled, DummyDEM"}.get(mode, mode)
+        ax.plot([p["ranks"] for p in pts], [base / p["s_per_step"] for p in pts], style, label=label)
     ax.plot(ns, ns, "k-", lw=0.5, label="ideal")
-    for r in rows:
-        if r["oversubscribed"]:
-            ax.axvspan(cores + 0.5, max(ns) + 0.5, color="0.9", zorder=0)
-            break
+    shade_oversubscribed(ax, rows, cores)
+    ax.set_xticks(ns)
     ax.set_xlabel("MPI ranks")
-    ax.set_ylabel("speedup")
+    ax.set_ylabel("speedup (fastest of the repeats)")
     ax.set_title(f"{name}: strong scaling{note}", fontsize=9)
-    ax.legend()
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "speedup.png"), dpi=120)
+    plt.close(fig)
 
-    pts = best(rows, "coupled") or best(rows, "dummy_dem")
-    if pts:
-        fig, ax = plt.subplots(figsize=(6, 4.5))
+    present = [(m, st) for m, st in COUPLED_MODES if best(rows, m)]
+    if not present:
+        return
+    fig, axes = plt.subplots(1, len(present), figsize=(6.4 * len(present), 4.8), squeeze=False)
+    for ax, (mode, _) in zip(axes[0], present):
+        pts = best(rows, mode)
         x = [p["ranks"] for p in pts]
-        for key, label in (("frac_fv", "fluid"), ("frac_dem", "particles"),
-                           ("frac_coupling", "coupling arithmetic"),
-                           ("frac_inter_physics", "inter-physics exchange")):
-            ax.plot(x, [100 * p[key] for p in pts], "o-", label=label)
+        for key, label, st in (("frac_fv", "fluid", "s--"), ("frac_dem", "particles", "^:"),
+                               ("frac_coupling", "coupling arithmetic", "o-"),
+                               ("frac_inter_physics", "inter-physics exchange", "d-")):
+            ax.plot(x, [100 * p[key] for p in pts], st, label=label)
+        shade_oversubscribed(ax, rows, cores)
+        ax.set_xticks(x)
         ax.set_xlabel("MPI ranks")
-        ax.set_ylabel("share of the coupled step (%)")
-        ax.set_title(f"{name}: time shares{note}", fontsize=9)
-        ax.legend()
-        fig.tight_layout()
-        fig.savefig(os.path.join(args.out, "shares.png"), dpi=120)
+        ax.set_ylabel(f"share of the {mode} step (%)")
+        ax.set_title(f"{name}, {mode}: time shares{note}", fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "shares.png"), dpi=120)
+    plt.close(fig)
 
-        fig, ax = plt.subplots(figsize=(6, 4.5))
-        ax.plot(x, [100 * p["frac_inter_physics"] for p in pts], "o-")
-        ax.set_xlabel("MPI ranks")
-        ax.set_ylabel("inter-physics exchange (% of the step)")
-        ax.set_title(f"{name}: inter-physics share{note}", fontsize=9)
-        fig.tight_layout()
-        fig.savefig(os.path.join(args.out, "inter_physics.png"), dpi=120)
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for mode, st in present:
+        pts = best(rows, mode)
+        ax.plot([p["ranks"] for p in pts], [max(100 * p["frac_inter_physics"], 1e-4) for p in pts], st,
+                label=mode)
+    ax.axhline(0.1, color="r", ls="--", lw=0.8, label="0.1 % (paper, case 3)")
+    ax.axhline(1.0, color="0.5", ls=":", lw=0.8, label="1 % (paper, case 2)")
+    shade_oversubscribed(ax, rows, cores)
+    ax.set_yscale("log")
+    ax.set_xticks(ns)
+    ax.set_xlabel("MPI ranks")
+    ax.set_ylabel("inter-physics exchange (% of the step)")
+    ax.set_title(f"{name}: inter-physics exchange share{note}", fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "inter_physics.png"), dpi=120)
+    plt.close(fig)
 
 
 def main():
@@ -151,6 +187,7 @@ def main():
             for r in csv.DictReader(f):
                 rows.append({k: (v if k == "mode" else float(v)) for k, v in r.items()})
                 rows[-1]["ranks"] = int(rows[-1]["ranks"])
+                rows[-1]["oversubscribed"] = int(rows[-1]["ranks"] > args.cores)
     else:
         for n in args.ranks:
             for mode in args.modes:
