@@ -26,6 +26,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -68,6 +69,9 @@ def row_of(report, n, mode, rep, cores):
         "peak_rss_bytes_sum": report["memory"]["peak_rss_bytes_sum"],
         "imbalance": report.get("load", {}).get("imbalance", 1.0),
         "exchange_remote_s": t.get("exchange_remote", {}).get("max", 0.0),
+        # the two parts of the inter-physics share: inside a rank (co-located) and across ranks
+        "frac_inter_local": t.get("exchange_local", {}).get("avg", 0.0) / max(report["run"]["wall_s"], 1e-300),
+        "frac_inter_remote": t.get("exchange_remote", {}).get("avg", 0.0) / max(report["run"]["wall_s"], 1e-300),
     }
 
 
@@ -147,12 +151,20 @@ def plot(rows, args, cores):
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     for mode, st in present:
         pts = best(rows, mode)
-        ax.plot([p["ranks"] for p in pts], [max(100 * p["frac_inter_physics"], 1e-4) for p in pts], st,
-                label=mode)
+        x = [p["ranks"] for p in pts]
+        c = "C0" if mode == "coupled" else "C1"
+        ax.plot(x, [max(100 * p["frac_inter_physics"], 1e-4) for p in pts], st[0] + "-", color=c,
+                label=f"{mode}: total")
+        if "frac_inter_local" in pts[0]:
+            ax.plot(x, [max(100 * p["frac_inter_local"], 1e-4) for p in pts], st[0] + ":", color=c,
+                    mfc="none", label=f"{mode}: inside a rank (co-located)")
+            ax.plot(x, [max(100 * p["frac_inter_remote"], 1e-4) for p in pts], st[0] + "--", color=c,
+                    mfc="none", label=f"{mode}: across ranks (reverse halo sum, incl. waiting)")
     ax.axhline(0.1, color="r", ls="--", lw=0.8, label="0.1 % (paper, case 3)")
     ax.axhline(1.0, color="0.5", ls=":", lw=0.8, label="1 % (paper, case 2)")
     shade_oversubscribed(ax, rows, cores)
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
     ax.set_xticks(ns)
     ax.set_xlabel("MPI ranks")
     ax.set_ylabel("inter-physics exchange (% of the step)")
