@@ -2,17 +2,21 @@
 """Strong scaling of a coloc case: run it over rank counts and modes, collect the reports,
 write a CSV table and PNG plots.
 
-    bench/scripts/scaling.py bench/cases/case2-small.json --ranks 1 2 4 --repeat 3 \
-        --modes coupled fluid particles --out bench/results/case2-small
+    bench/scripts/scaling.py bench/cases/case3-small.json --ranks 1 2 4 --repeat 2 \
+        --modes coupled fluid particles --coloc build/coloc      # -> bench/results/case3-small/
 
-On a cluster pass the launcher, e.g. --launcher "srun -n {n}" (default "mpiexec -n {n}").
-Any `--set key=value` after `--` goes to every run. Points with more ranks than this machine's
-cores are marked "oversubscribed" in the CSV and on the plots.
+On a cluster pass the launcher, e.g. --launcher "srun -n {n}" (default
+"mpiexec -n {n} --bind-to none") and --cores (the cores available, for the oversubscription
+mark). Overrides go to every run: --set key=value (repeatable), or key=value ... after --.
+Points with more ranks than --cores (default: this machine's) are marked "oversubscribed" in
+the CSV and shaded on the plots. --plot-only re-plots an existing scaling.csv.
 
-Outputs (in --out): scaling.csv (one row per run), speedup.png (coupled vs fluid-only vs
-particles-only against ranks), shares.png (fluid / particles / coupling / inter-physics shares of
-the coupled step against ranks), inter_physics.png (the inter-physics exchange share against
-ranks, as in the paper).
+Outputs (in --out, default bench/results/<case name>/): scaling.csv (one row per run; per-run
+folders under runs/, not committed), speedup.png (each mode's speedup over its smallest rank
+count, fastest repeat), shares.png (fluid / particles / coupling arithmetic / inter-physics
+shares of each coupled mode's step against ranks), inter_physics.png (the inter-physics exchange
+share against ranks as in the paper, split into inside-a-rank and across-ranks parts, with the
+paper's 0.1 % and 1 % marks).
 """
 import argparse
 import csv
@@ -187,8 +191,15 @@ def main():
     p.add_argument("--out", default=None)
     p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
     p.add_argument("--plot-only", action="store_true", help="re-plot an existing scaling.csv")
-    p.add_argument("set", nargs="*", help="key=value overrides (after --)")
-    args = p.parse_args()
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override passed to every run (repeatable); also accepted after --")
+    argv = sys.argv[1:]
+    extra = []
+    if "--" in argv:  # everything after -- is KEY=VALUE overrides
+        i = argv.index("--")
+        argv, extra = argv[:i], argv[i + 1:]
+    args = p.parse_args(argv)
+    args.set += extra
     if args.out is None:
         args.out = os.path.join(ROOT, "bench", "results", os.path.basename(args.case).replace(".json", ""))
     os.makedirs(args.out, exist_ok=True)
