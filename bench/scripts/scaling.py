@@ -152,7 +152,7 @@ def plot(rows, args, cores):
     fig.savefig(os.path.join(args.out, "shares.png"), dpi=120)
     plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    fig, ax = plt.subplots(figsize=(7.2, 6.0))
     for mode, st in present:
         pts = best(rows, mode)
         x = [p["ranks"] for p in pts]
@@ -174,7 +174,7 @@ def plot(rows, args, cores):
     ax.set_ylabel("inter-physics exchange (% of the step)")
     ax.set_title(f"{name}: inter-physics exchange share{note}", fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "inter_physics.png"), dpi=120)
     plt.close(fig)
