@@ -116,6 +116,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
   Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);
   OutputWriter output(sim.decomposition(), outputOptionsFromConfig(cfg, outDir));
   sim.writeOutput(output);
+  sim.timers().beginRun();
   const double tLoop = MPI_Wtime();
   while (!sim.finished()) {
     sim.step();

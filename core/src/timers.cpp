@@ -33,6 +33,13 @@ void Timers::book(Exchange kind, long long bytes, long long messages, double sec
   l.seconds += seconds;
 }
 
+void Timers::beginRun() {
+  const Slot setup = slots_[idx(Phase::Setup)];
+  slots_ = {};
+  ledger_ = {};
+  slots_[idx(Phase::Setup)] = setup;
+}
+
 void Timers::reset() {
   slots_ = {};
   ledger_ = {};

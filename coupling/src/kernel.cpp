@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "coloc/core/error.hpp"
 
@@ -32,12 +33,15 @@ long long Stencils::compute(KernelKind kind, const Decomposition& dec, const Fie
     box.hi[d] = std::min(box.hi[d], layout.n[d] + 1);
   }
   const auto e = layout.extent();
-  const std::int64_t sy = e[0], sz = static_cast<std::int64_t>(e[0]) * e[1];
-  const std::int64_t off = layout.ghost + layout.ghost * sy + layout.ghost * sz;
+  if (layout.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+    throw Error("coupling: a block of more than 2^31 cells (with ghosts) per rank is not supported; "
+                "use more ranks");
+  const std::int32_t sy = e[0], sz = static_cast<std::int32_t>(e[0]) * e[1];
+  const std::int32_t off = layout.ghost + layout.ghost * sy + layout.ghost * sz;
   long long bad = -1;
   for (std::size_t p = 0; p < n; ++p) {
     const double s[3] = {(x[p] - lo[0]) * inv[0], (y[p] - lo[1]) * inv[1], (z[p] - lo[2]) * inv[2]};
-    std::int64_t* c = cell_.data() + p * width_;
+    std::int32_t* c = cell_.data() + p * width_;
     double* w = weight_.data() + p * width_;
     if (kind == KernelKind::Centroid) {
       int i[3];

@@ -96,6 +96,9 @@ class Timers {
   long long bytes(Exchange kind) const { return ledger_[idx(kind)].bytes; }
   long long messages(Exchange kind) const { return ledger_[idx(kind)].messages; }
   void reset();
+  /// Start of the time loop: forget what the phases and the ledger gathered during set-up
+  /// (the Setup phase itself is kept), so fractions and calls describe the steps only.
+  void beginRun();
 
   /// Collective: timers.<phase>.{min,avg,max,calls,busy_max,busy_avg},
   /// exchange.<kind>.{bytes,messages,time_s}, fractions.*, load_imbalance.

@@ -36,8 +36,8 @@ class Stencils {
                     std::span<const double> z, std::size_t n);
   int width() const { return width_; }
   std::size_t count() const { return n_; }
-  /// Linear indices into Field3::data() and weights of particle p.
-  std::span<const std::int64_t> cells(std::size_t p) const {
+  /// Linear indices into Field3::data() (32-bit: a block holds < 2^31 cells) and weights of p.
+  std::span<const std::int32_t> cells(std::size_t p) const {
     return {cell_.data() + p * width_, static_cast<std::size_t>(width_)};
   }
   std::span<const double> weights(std::size_t p) const {
@@ -47,7 +47,7 @@ class Stencils {
  private:
   int width_ = 1;
   std::size_t n_ = 0;
-  std::vector<std::int64_t> cell_;
+  std::vector<std::int32_t> cell_;
   std::vector<double> weight_;
 };
 
