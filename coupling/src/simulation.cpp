@@ -166,7 +166,11 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
     uCellOld_[d] = CellField(layout);
     gradP_[d] = CellField(layout);
   }
-  halo_ = HaloPlan(dec_, layout);
+  // Stencils reach one ghost layer: the coupling's halo plan moves (and folds) only that layer
+  // of the fluid-layout fields, whatever ghost width the fluid keeps for itself.
+  FieldLayout oneLayer = layout;
+  oneLayer.ghost = 1;
+  halo_ = HaloPlan(dec_, oneLayer);
 
   // The initial porosity: deposit the particle volume once and start with eps^0 = eps^1 so the
   // first step sees no spurious d(eps)/dt.
