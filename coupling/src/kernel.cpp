@@ -101,6 +101,22 @@ void interpolate(const Stencils& s, const CellField& f, std::span<double> out) {
   }
 }
 
+void smooth(const Decomposition& dec, HaloPlan& halo, CellField& f, CellField& scratch) {
+  constexpr double alpha = 1.0 / 8.0;
+  halo.gather(f);
+  fillWallGhostsByMirror(dec, f);
+  const std::ptrdiff_t sy = f.strideY(), sz = f.strideZ();
+  const double* in = f.data().data();
+  double* out = scratch.data().data();
+  forEach(f.interior(), [&](int i, int j, int k) {
+    const std::ptrdiff_t c = f.index(i, j, k);
+    const double v = in[c];
+    out[c] = v + alpha * (in[c - 1] + in[c + 1] + in[c - sy] + in[c + sy] + in[c - sz] +
+                          in[c + sz] - 6.0 * v);
+  });
+  forEach(f.interior(), [&](int i, int j, int k) { f(i, j, k) = scratch(i, j, k); });
+}
+
 void fillWallGhostsByMirror(const Decomposition& dec, CellField& f) {
   const auto& l = f.layout();
   const IndexBox all = l.allocated();

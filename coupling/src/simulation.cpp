@@ -18,6 +18,10 @@ void declareConfig(Schema& s) {
   s.string("coupling.drag", "difelice", "drag law: stokes, difelice, gidaspow, beetstra",
            {"stokes", "difelice", "gidaspow", "beetstra"});
   s.number("coupling.eps_min", 0.3, "lower clip of the fluid fraction", Range::openClosed(0.0, 1.0));
+  s.integer("coupling.smoothing_passes", 0,
+            "passes of a conservative diffusion filter (alpha 1/8) on the deposited fields and, "
+            "adjointly, on the fields sampled at the particles (0: off)",
+            Range::nonNegative());
   s.integer("coupling.dem_substeps", 0,
             "DEM sub-steps per CFD step; 0: the CFD step divided by particles.dt",
             Range::nonNegative());
@@ -156,10 +160,12 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
   kernel_ = kernelFromName(cfg.string("coupling.kernel"));
   drag_ = dragLawFromName(cfg.string("coupling.drag"));
   epsMin_ = cfg.number("coupling.eps_min");
+  smoothingPasses_ = static_cast<int>(cfg.integer("coupling.smoothing_passes"));
   rhoF_ = cfg.number("fluid.rho");
   nu_ = cfg.number("fluid.nu");
   const FieldLayout layout = fluid_->fields().p.layout();
   solid_ = CellField(layout);
+  scratch_ = CellField(layout);
   eps_ = CellField(layout, 1.0);
   for (int d = 0; d < 3; ++d) {
     uCell_[d] = CellField(layout);
@@ -396,12 +402,23 @@ void Simulation::computeStencils() {
   for (std::size_t i = 0; i < n; ++i) volume_[i] = 4.0 / 3.0 * kPi * std::pow(view_.radius[i], 3);
 }
 
+const CellField& Simulation::sampled(const CellField& f, CellField& smoothed) {
+  // With smoothing, the particles see S(f), S the filter applied to the deposits: the adjoint.
+  if (smoothingPasses_ == 0) return f;
+  if (!(smoothed.layout() == f.layout())) smoothed = CellField(f.layout());
+  forEach(f.interior(), [&](int i, int j, int k) { smoothed(i, j, k) = f(i, j, k); });
+  smoothField(smoothed);
+  halo_.gather(smoothed);
+  fillWallGhostsByMirror(dec_, smoothed);
+  return smoothed;
+}
+
 void Simulation::sampleFluidForDrag() {
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
-  interpolate(stencils_, eps_, epsAt_);
+  interpolate(stencils_, eps_, epsAt_);  // eps = 1 - S(solid) is smooth already
   for (int d = 0; d < 3; ++d) {
-    interpolate(stencils_, uCell_[d], uAt_[d]);
-    interpolate(stencils_, gradP_[d], gradPAt_[d]);
+    interpolate(stencils_, sampled(uCell_[d], uSmooth_[d]), uAt_[d]);
+    interpolate(stencils_, sampled(gradP_[d], gradPSmooth_[d]), gradPAt_[d]);
   }
 }
 
@@ -458,6 +475,14 @@ void Simulation::sumDepositsAcrossBlocks() {
   auto& f = fluid_->fields();
   Field3<double>* fields[5] = {&solid_, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
   halo_.scatterSum(fields, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
+  if (smoothingPasses_ > 0) {
+    ScopedPhase s(timers_, Phase::CouplingDeposit);
+    for (auto* fld : fields) smoothField(*fld);
+  }
+}
+
+void Simulation::smoothField(CellField& f) {
+  for (int pass = 0; pass < smoothingPasses_; ++pass) smooth(dec_, halo_, f, scratch_);
 }
 
 void Simulation::updateFluidCoefficients() {
@@ -507,8 +532,8 @@ void Simulation::sampleFluidForForces() {
   }
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
   for (int d = 0; d < 3; ++d) {
-    interpolate(stencils_, uCell_[d], uAt_[d]);
-    interpolate(stencils_, gradP_[d], gradPAt_[d]);
+    interpolate(stencils_, sampled(uCell_[d], uSmooth_[d]), uAt_[d]);
+    interpolate(stencils_, sampled(gradP_[d], gradPSmooth_[d]), gradPAt_[d]);
   }
 }
 

@@ -1,7 +1,8 @@
 // Momentum conservation of the drag exchange: over every coupled step, the momentum the fluid
 // loses through its (semi-implicit) drag term equals the drag impulse the particles receive, to
 // round-off (tolerance 1e-12 relative), at 1, 2 and 4 ranks, for both kernels and a nonlinear
-// drag law. Walls on two axes exercise the mirror fold at the box faces.
+// drag law, with and without the smoothing filter. Walls on two axes exercise the mirror fold at
+// the box faces.
 #include "coupled_util.hpp"
 
 using namespace coloc;
@@ -24,7 +25,12 @@ const char* kCase = R"({
 class Momentum : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Momentum, FluidLossEqualsParticleDragImpulse) {
-  const Config cfg = test::caseFromText(kCase, {"coupling.kernel=" + GetParam()});
+  const auto param = GetParam();
+  const auto colon = param.find(':');
+  const std::string kernel = param.substr(0, colon);
+  const std::string passes = colon == std::string::npos ? "0" : param.substr(colon + 1);
+  const Config cfg = test::caseFromText(
+      kCase, {"coupling.kernel=" + kernel, "coupling.smoothing_passes=" + passes});
   coupling::Simulation sim(Comm::world(), cfg);
   while (!sim.finished()) {
     sim.step();
@@ -39,4 +45,6 @@ TEST_P(Momentum, FluidLossEqualsParticleDragImpulse) {
   EXPECT_EQ(sim.particles()->globalCount(), 60);
 }
 
-INSTANTIATE_TEST_SUITE_P(Kernels, Momentum, ::testing::Values("trilinear", "centroid"));
+// kernel[:smoothing passes]
+INSTANTIATE_TEST_SUITE_P(Kernels, Momentum,
+                         ::testing::Values("trilinear", "centroid", "trilinear:2", "centroid:3"));

@@ -164,3 +164,35 @@ TEST_P(KernelTest, DepositedFieldIsIndependentOfTheRankCount) {
 
 INSTANTIATE_TEST_SUITE_P(Kernels, KernelTest,
                          ::testing::Values(KernelKind::Centroid, KernelKind::Trilinear));
+
+TEST(Smoothing, ConservesTotalsAndIsSelfAdjoint) {
+  // <S a, b> = <a, S b> over the owned cells (walls and periodic axes, any rank count), and the
+  // total is conserved: what makes the smoothed deposit and the smoothed interpolation adjoint.
+  const auto dec = Decomposition::uniform(Comm::world(), grid());
+  const auto layout = cellLayout(dec, 1);
+  CellField a(layout), b(layout), scratch(layout);
+  forEach(a.interior(), [&](int i, int j, int k) {
+    const int gi = dec.lo()[0] + i, gj = dec.lo()[1] + j, gk = dec.lo()[2] + k;
+    a(i, j, k) = (gi == 3 && gj == 1 && gk == 2) ? 1.0 : 0.0;  // a spike
+    b(i, j, k) = field(gi, gj, gk);
+  });
+  auto dot = [&](const CellField& x, const CellField& y) {
+    double s = 0;
+    forEach(x.interior(), [&](int i, int j, int k) { s += x(i, j, k) * y(i, j, k); });
+    return dec.comm().sum(s);
+  };
+  auto total = [&](const CellField& x) {
+    double s = 0;
+    forEach(x.interior(), [&](int i, int j, int k) { s += x(i, j, k); });
+    return dec.comm().sum(s);
+  };
+  HaloPlan halo(dec, layout);
+  CellField sa = a, sb = b;
+  smooth(dec, halo, sa, scratch);
+  smooth(dec, halo, sb, scratch);
+  EXPECT_NEAR(total(sa), 1.0, 1e-14);
+  EXPECT_NEAR(dot(sa, b), dot(a, sb), 1e-13);
+  double peak = 0;
+  forEach(sa.interior(), [&](int i, int j, int k) { peak = std::max(peak, sa(i, j, k)); });
+  EXPECT_NEAR(dec.comm().max(peak), 1.0 - 6.0 / 8.0, 1e-14);  // the spike spreads
+}

@@ -20,6 +20,7 @@
 
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/field.hpp"
+#include "coloc/partition/halo.hpp"
 
 namespace coloc::coupling {
 
@@ -55,6 +56,14 @@ class Stencils {
 void deposit(const Stencils& s, std::span<const double> q, double scale, CellField& f);
 /// out_i = sum_c w_ic f_c.
 void interpolate(const Stencils& s, const CellField& f, std::span<double> out);
+/// One pass of a conservative, self-adjoint smoothing filter on the owned cells:
+///   f_c <- f_c + alpha * sum_{6 neighbours} (f_nb - f_c),  alpha = 1/8 (stable below 1/6),
+/// with the neighbours' values from a halo gather and zero flux through walls (mirror ghosts).
+/// Applied to the deposited fields and, before interpolation, to the sampled fields, it keeps
+/// deposit and interpolation adjoint (the drag exchange stays exactly conservative).
+/// `scratch` must have f's layout.
+void smooth(const Decomposition& dec, HaloPlan& halo, CellField& f, CellField& scratch);
+
 /// Fill the ghost layers beyond non-periodic box faces with the mirror image of the owned layers
 /// (ghost -1-m <- owned m): the adjoint of the Fold::Mirror reverse halo sum.
 void fillWallGhostsByMirror(const Decomposition& dec, CellField& f);

@@ -134,6 +134,8 @@ class Simulation {
   void sampleFluidForForces();
   void applyCouplingForces(double dt);
   void handForcesToParticles();
+  void smoothField(CellField& f);
+  const CellField& sampled(const CellField& f, CellField& smoothed);
   void bookProxyTraffic(int valuesPerParticle, double seconds);
   void advanceParticles(int n);
   void refreshCellVelocity();
@@ -173,7 +175,9 @@ class Simulation {
   bool coupled_ = false;
 
   // Cell fields on the fluid's cell layout.
-  CellField solid_, eps_;
+  CellField solid_, eps_, scratch_;
+  std::array<CellField, 3> uSmooth_, gradPSmooth_;
+  int smoothingPasses_ = 0;
   std::array<CellField, 3> uCell_, uCellOld_, gradP_;
   HaloPlan halo_;
   Stencils stencils_;
