@@ -19,8 +19,9 @@ int main(int argc, char** argv) {
   coloc::MpiSession mpi(&argc, &argv);
   const coloc::Comm world = coloc::Comm::world();
 
-  CLI::App app{"coloc: co-located partitions CFD-DEM mini-app (fluid cells and the particles in\n"
-               "the same region live on the same MPI rank). Run with mpirun -n N coloc run CASE."};
+  CLI::App app{
+      "coloc: co-located partitions CFD-DEM mini-app (fluid cells and the particles in\n"
+      "the same region live on the same MPI rank). Run with mpirun -n N coloc run CASE."};
   app.require_subcommand(1);
   app.set_version_flag("--version", coloc::kVersionString);
   coloc::RunOptions opts;

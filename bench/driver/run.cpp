@@ -91,7 +91,8 @@ class Series {
 }  // namespace
 
 std::string describeKeys() {
-  return "Case-file keys (dotted paths; --set takes the same):\n" + coupling::caseSchema().describe();
+  return "Case-file keys (dotted paths; --set takes the same):\n" +
+         coupling::caseSchema().describe();
 }
 
 int runCase(const Comm& world, const RunOptions& opts) {
@@ -103,14 +104,16 @@ int runCase(const Comm& world, const RunOptions& opts) {
   if (world.isRoot()) makeDirectories(outDir);
   coupling::Simulation sim(world, cfg);
   const double setupWall = MPI_Wtime() - t0;
-  const long long particleCount = sim.particles() ? sim.particles()->globalCount() : 0;  // collective
+  const long long particleCount =
+      sim.particles() ? sim.particles()->globalCount() : 0;  // collective
   if (world.isRoot() && !opts.quiet) {
     const auto& dec = sim.decomposition();
-    std::printf("coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
-                "set-up %.2f s\n",
-                cfg.string("name").c_str(), runModeName(sim.mode()), dec.size(), dec.dims()[0],
-                dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()),
-                particleCount, setupWall);
+    std::printf(
+        "coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
+        "set-up %.2f s\n",
+        cfg.string("name").c_str(), runModeName(sim.mode()), dec.size(), dec.dims()[0],
+        dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()), particleCount,
+        setupWall);
   }
   Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"));
   Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);
@@ -134,13 +137,14 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const std::string path = report.write(world, outDir);
   if (world.isRoot()) {
     const auto& j = report.json();
-    std::printf("coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
-                "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
-                j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
-                j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
-                j["throughput"]["cell_steps_per_s"].get<double>(),
-                j["throughput"]["particle_steps_per_s"].get<double>(),
-                100.0 * j["fractions"]["inter_physics"].get<double>());
+    std::printf(
+        "coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
+        "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
+        j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
+        j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
+        j["throughput"]["cell_steps_per_s"].get<double>(),
+        j["throughput"]["particle_steps_per_s"].get<double>(),
+        100.0 * j["fractions"]["inter_physics"].get<double>());
     std::printf("coloc: report written to %s\n", path.c_str());
   }
   return 0;

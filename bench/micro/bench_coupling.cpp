@@ -103,5 +103,9 @@ BENCHMARK(BM_StencilCompute)->Args({100000, 0})->Args({100000, 1})->Unit(benchma
 BENCHMARK(BM_Deposit)->Args({100000, 0})->Args({100000, 1})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Interpolate)->Args({100000, 0})->Args({100000, 1})->Unit(benchmark::kMicrosecond);
 // Args: {particles, law (0 stokes, 1 difelice, 2 gidaspow, 3 beetstra)}
-BENCHMARK(BM_Drag)->Args({100000, 0})->Args({100000, 1})->Args({100000, 2})->Args({100000, 3})
+BENCHMARK(BM_Drag)
+    ->Args({100000, 0})
+    ->Args({100000, 1})
+    ->Args({100000, 2})
+    ->Args({100000, 3})
     ->Unit(benchmark::kMicrosecond);

@@ -59,9 +59,8 @@ void contactKernel(benchmark::State& state) {
   double F[3] = {0, 0, 0}, T[3] = {0, 0, 0};
   for (auto _ : state) {
     for (std::size_t i = 0; i < n; ++i)
-      coloc::dem::detail::contactForce<M>(c, 1e-5, true, &nrm[3 * i], dl[i], 2.5e-4, 0.5 * m,
-                                          5e-4, &vr[3 * i], &ws[3 * i], &wr[3 * i], &sh[3 * i], F,
-                                          T);
+      coloc::dem::detail::contactForce<M>(c, 1e-5, true, &nrm[3 * i], dl[i], 2.5e-4, 0.5 * m, 5e-4,
+                                          &vr[3 * i], &ws[3 * i], &wr[3 * i], &sh[3 * i], F, T);
     benchmark::DoNotOptimize(F);
     benchmark::DoNotOptimize(T);
     benchmark::ClobberMemory();
@@ -208,6 +207,16 @@ void BM_DemBed(benchmark::State& state) {
 
 BENCHMARK(contactKernel<Model::HertzMindlin>)->Name("BM_ContactHertz")->Arg(4096)->Arg(65536);
 BENCHMARK(contactKernel<Model::Linear>)->Name("BM_ContactLinear")->Arg(4096)->Arg(65536);
-BENCHMARK(BM_NeighborBuild)->Arg(10000)->Arg(100000)->Iterations(10)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ForceLoop)->Arg(10000)->Arg(100000)->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NeighborBuild)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Iterations(10)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ForceLoop)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Iterations(20)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DemBed)->Iterations(5)->UseManualTime()->Unit(benchmark::kMillisecond);

@@ -27,7 +27,8 @@ using namespace coloc;
 
 void BM_PressureSolve(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const auto kind = state.range(1) == 0 ? fv::PressureSolver::Kind::Pfmg : fv::PressureSolver::Kind::Smg;
+  const auto kind =
+      state.range(1) == 0 ? fv::PressureSolver::Kind::Pfmg : fv::PressureSolver::Kind::Smg;
   GlobalGrid g;
   g.cells = {n, n, n};
   const auto dec = Decomposition::uniform(Comm::world(), g);
@@ -77,8 +78,8 @@ void BM_FluidChannelStep(benchmark::State& state) {
   declareDomainConfig(s);
   fv::declareConfig(s);
   const Config cfg = Config::load(Comm::world(), COLOC_SOURCE_DIR "/bench/cases/fluid-channel.json",
-                                  {"domain.cells=[" + std::to_string(5 * n) + "," + std::to_string(n) +
-                                   "," + std::to_string(n) + "]"},
+                                  {"domain.cells=[" + std::to_string(5 * n) + "," +
+                                   std::to_string(n) + "," + std::to_string(n) + "]"},
                                   s);
   const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
   Timers timers;
@@ -114,7 +115,18 @@ void BM_FluidChannelStep(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_PressureSolve)->Args({32, 0})->Args({64, 0})->Args({128, 0})->Args({64, 1})
-    ->Iterations(3)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_FluidChannelStep)->Arg(10)->Arg(20)->Arg(50)->Iterations(5)->UseManualTime()
+BENCHMARK(BM_PressureSolve)
+    ->Args({32, 0})
+    ->Args({64, 0})
+    ->Args({128, 0})
+    ->Args({64, 1})
+    ->Iterations(3)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FluidChannelStep)
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(50)
+    ->Iterations(5)
+    ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

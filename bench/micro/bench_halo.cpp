@@ -36,10 +36,25 @@ void haloBench(benchmark::State& state, bool reverse) {
   state.counters["bytes_per_exchange"] = static_cast<double>(plan.bytesPerGather());
 }
 
-void BM_HaloGather(benchmark::State& s) { haloBench(s, false); }
-void BM_HaloScatterSum(benchmark::State& s) { haloBench(s, true); }
+void BM_HaloGather(benchmark::State& s) {
+  haloBench(s, false);
+}
+void BM_HaloScatterSum(benchmark::State& s) {
+  haloBench(s, true);
+}
 
 }  // namespace
 
-BENCHMARK(BM_HaloGather)->Args({32, 1})->Args({128, 1})->Args({128, 2})->Iterations(30)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_HaloScatterSum)->Args({32, 1})->Args({128, 1})->Iterations(30)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HaloGather)
+    ->Args({32, 1})
+    ->Args({128, 1})
+    ->Args({128, 2})
+    ->Iterations(30)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HaloScatterSum)
+    ->Args({32, 1})
+    ->Args({128, 1})
+    ->Iterations(30)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);

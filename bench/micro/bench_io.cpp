@@ -16,7 +16,8 @@ namespace {
 
 std::string benchFile(const char* name) {
   const char* dir = std::getenv("COLOC_BENCH_DIR");
-  const auto base = dir && *dir ? std::filesystem::path(dir) : std::filesystem::temp_directory_path();
+  const auto base =
+      dir && *dir ? std::filesystem::path(dir) : std::filesystem::temp_directory_path();
   return (base / (std::string("coloc_bench_io_") + name + ".h5")).string();
 }
 
@@ -112,6 +113,20 @@ void BM_WriteParticles(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_WriteCellField)->Arg(64)->Arg(128)->Iterations(10)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ReadCellField)->Arg(64)->Arg(128)->Iterations(10)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_WriteParticles)->Arg(1 << 20)->Iterations(5)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WriteCellField)
+    ->Arg(64)
+    ->Arg(128)
+    ->Iterations(10)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ReadCellField)
+    ->Arg(64)
+    ->Arg(128)
+    ->Iterations(10)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WriteParticles)
+    ->Arg(1 << 20)
+    ->Iterations(5)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);

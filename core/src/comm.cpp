@@ -30,7 +30,9 @@ int Comm::size() const {
   return s;
 }
 
-void Comm::barrier() const { MPI_Barrier(comm_); }
+void Comm::barrier() const {
+  MPI_Barrier(comm_);
+}
 
 MinMaxAvg Comm::minMaxAvg(double v) const {
   double in[2] = {v, -v}, out[2];

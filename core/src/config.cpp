@@ -24,15 +24,24 @@ std::string typeName(const Json& v) {
 
 std::string kindName(KeyKind k) {
   switch (k) {
-    case KeyKind::Number: return "a number";
-    case KeyKind::Integer: return "an integer";
-    case KeyKind::Boolean: return "a boolean";
-    case KeyKind::String: return "a string";
-    case KeyKind::Vec3: return "a list of 3 numbers";
-    case KeyKind::IntVec3: return "a list of 3 integers";
-    case KeyKind::NumberList: return "a list of numbers";
-    case KeyKind::Object: return "an object";
-    case KeyKind::List: return "a list of objects";
+    case KeyKind::Number:
+      return "a number";
+    case KeyKind::Integer:
+      return "an integer";
+    case KeyKind::Boolean:
+      return "a boolean";
+    case KeyKind::String:
+      return "a string";
+    case KeyKind::Vec3:
+      return "a list of 3 numbers";
+    case KeyKind::IntVec3:
+      return "a list of 3 integers";
+    case KeyKind::NumberList:
+      return "a list of numbers";
+    case KeyKind::Object:
+      return "an object";
+    case KeyKind::List:
+      return "a list of objects";
   }
   return "?";
 }
@@ -43,7 +52,8 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
   for (std::size_t i = 1; i <= a.size(); ++i) {
     cur[0] = i;
     for (std::size_t j = 1; j <= b.size(); ++j)
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      cur[j] =
+          std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
     std::swap(prev, cur);
   }
   return prev[b.size()];
@@ -64,7 +74,9 @@ std::vector<std::string> split(const std::string& path) {
   return parts;
 }
 
-bool isNumber(const Json& v) { return v.is_number() && !v.is_boolean(); }
+bool isNumber(const Json& v) {
+  return v.is_number() && !v.is_boolean();
+}
 bool isIntegral(const Json& v) {
   if (v.is_number_integer() || v.is_number_unsigned()) return true;
   if (!v.is_number_float()) return false;
@@ -268,8 +280,7 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
   for (const auto& [key, spec] : keys_) {
     const std::string path = join(prefix, key);
     const bool present = user.contains(key);
-    if (!present && spec.defaultValue.is_null() &&
-        !(spec.kind == KeyKind::Object && spec.object))
+    if (!present && spec.defaultValue.is_null() && !(spec.kind == KeyKind::Object && spec.object))
       throw ConfigError(path, "required key is missing");
     const Json& v = present ? user.at(key) : spec.defaultValue;
     switch (spec.kind) {
@@ -351,8 +362,10 @@ std::string Schema::describe(const std::string& prefix) const {
       continue;
     }
     os << "  " << path << "  (" << kindName(spec.kind);
-    if (!spec.defaultValue.is_null()) os << ", default " << spec.defaultValue.dump();
-    else os << ", required";
+    if (!spec.defaultValue.is_null())
+      os << ", default " << spec.defaultValue.dump();
+    else
+      os << ", required";
     if (spec.kind == KeyKind::Number || spec.kind == KeyKind::Integer || spec.kind == KeyKind::Vec3)
       if (std::isfinite(spec.range.lo) || std::isfinite(spec.range.hi))
         os << ", range " << spec.range.describe();
@@ -412,8 +425,8 @@ Config Config::fromText(const std::string& text, const std::string& source,
   } catch (const Json::parse_error& e) {
     std::string what = e.what();
     const auto pos = what.find("parse error");
-    throw ConfigError("", source + ": malformed JSON: " +
-                              (pos == std::string::npos ? what : what.substr(pos)));
+    throw ConfigError(
+        "", source + ": malformed JSON: " + (pos == std::string::npos ? what : what.substr(pos)));
   }
   if (!doc.is_object()) throw ConfigError("", source + ": the case must be a JSON object");
   for (const auto& o : overrides) applyOverride(doc, o);

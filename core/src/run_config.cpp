@@ -5,7 +5,8 @@ namespace coloc {
 void declareRunConfig(Schema& s) {
   s.string("name", "case", "case name (default output folder out/<name>)");
   s.string("description", "", "free text, copied to the report");
-  s.string("run.mode", "coupled", "what runs: coupled, fluid (CFD only), particles (DEM only), "
+  s.string("run.mode", "coupled",
+           "what runs: coupled, fluid (CFD only), particles (DEM only), "
            "dummy_dem (paper's case 2: particles frozen, every exchange done)",
            {"coupled", "fluid", "particles", "dummy_dem"});
   s.vec3("gravity", std::array<double, 3>{0, 0, 0},
@@ -28,10 +29,14 @@ RunMode runMode(const Config& cfg) {
 
 const char* runModeName(RunMode m) {
   switch (m) {
-    case RunMode::Coupled: return "coupled";
-    case RunMode::FluidOnly: return "fluid";
-    case RunMode::ParticlesOnly: return "particles";
-    case RunMode::DummyDem: return "dummy_dem";
+    case RunMode::Coupled:
+      return "coupled";
+    case RunMode::FluidOnly:
+      return "fluid";
+    case RunMode::ParticlesOnly:
+      return "particles";
+    case RunMode::DummyDem:
+      return "dummy_dem";
   }
   return "?";
 }

@@ -61,9 +61,9 @@ Json Timers::report(const Comm& comm, double stepWallSeconds) const {
         kPhases[i].compute)
       busyComputeLocal += s.cpu;
     if (calls == 0) continue;
-    timers[std::string(kPhases[i].name)] = {{"min", w.min},         {"avg", w.avg},
-                                            {"max", w.max},         {"calls", calls},
-                                            {"busy_avg", b.avg},    {"busy_max", b.max}};
+    timers[std::string(kPhases[i].name)] = {{"min", w.min},      {"avg", w.avg},
+                                            {"max", w.max},      {"calls", calls},
+                                            {"busy_avg", b.avg}, {"busy_max", b.max}};
   }
   out["timers"] = timers;
   Json ex = Json::object();

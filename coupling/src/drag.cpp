@@ -18,10 +18,14 @@ DragLaw dragLawFromName(const std::string& name) {
 
 const char* dragLawName(DragLaw law) {
   switch (law) {
-    case DragLaw::Stokes: return "stokes";
-    case DragLaw::DiFelice: return "difelice";
-    case DragLaw::Gidaspow: return "gidaspow";
-    case DragLaw::Beetstra: return "beetstra";
+    case DragLaw::Stokes:
+      return "stokes";
+    case DragLaw::DiFelice:
+      return "difelice";
+    case DragLaw::Gidaspow:
+      return "gidaspow";
+    case DragLaw::Beetstra:
+      return "beetstra";
   }
   return "?";
 }
@@ -59,8 +63,8 @@ double dragCoefficient(DragLaw law, double eps, double d, double slip, double rh
       } else {
         const double re = std::max(eps * d * slip / nu, 1e-12);
         // Cd * slip, finite as slip -> 0 (Cd = 24/Re (1 + 0.15 Re^0.687)).
-        const double cdSlip = re < 1000.0 ? 24.0 * nu / (eps * d) * (1.0 + 0.15 * std::pow(re, 0.687))
-                                          : 0.44 * slip;
+        const double cdSlip =
+            re < 1000.0 ? 24.0 * nu / (eps * d) * (1.0 + 0.15 * std::pow(re, 0.687)) : 0.44 * slip;
         b = 0.75 * cdSlip * eps * phi * rhoF / d * std::pow(eps, -2.65);
       }
       return b * vp / phi;

@@ -34,8 +34,9 @@ long long Stencils::compute(KernelKind kind, const Decomposition& dec, const Fie
   }
   const auto e = layout.extent();
   if (layout.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
-    throw Error("coupling: a block of more than 2^31 cells (with ghosts) per rank is not supported; "
-                "use more ranks");
+    throw Error(
+        "coupling: a block of more than 2^31 cells (with ghosts) per rank is not supported; "
+        "use more ranks");
   const std::int32_t sy = e[0], sz = static_cast<std::int32_t>(e[0]) * e[1];
   const std::int32_t off = layout.ghost + layout.ghost * sy + layout.ghost * sz;
   long long bad = -1;

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "coloc/core/error.hpp"
@@ -17,7 +17,8 @@ void declareConfig(Schema& s) {
            {"centroid", "trilinear"});
   s.string("coupling.drag", "difelice", "drag law: stokes, difelice, gidaspow, beetstra",
            {"stokes", "difelice", "gidaspow", "beetstra"});
-  s.number("coupling.eps_min", 0.3, "lower clip of the fluid fraction", Range::openClosed(0.0, 1.0));
+  s.number("coupling.eps_min", 0.3, "lower clip of the fluid fraction",
+           Range::openClosed(0.0, 1.0));
   s.integer("coupling.smoothing_passes", 0,
             "passes of a conservative diffusion filter (alpha 1/8) on the deposited fields and, "
             "adjointly, on the fields sampled at the particles (0: off)",
@@ -82,7 +83,8 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   const auto& g = uniform.grid();
   const bool independent = strategy == "independent";
   CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
-  if (independent) model = CostModel{0.0, 1.0};  // the DEM's blocks: balanced by particle count
+  if (independent)
+    model = CostModel{0.0, 1.0};  // the DEM's blocks: balanced by particle count
   else if (cfg.integer("partition.calibrate_steps") > 0)
     model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
   // Where the particles are: a DEM built on the uniform blocks, only to count them per cell.
@@ -149,7 +151,8 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
   endTime_ = cfg.number("run.end_time");
   if (maxSteps_ == 0 && endTime_ <= 0)
     throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
-  if (mode_ != RunMode::ParticlesOnly) fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
+  if (mode_ != RunMode::ParticlesOnly)
+    fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
   if (mode_ != RunMode::FluidOnly) {
     dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
     if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
@@ -225,7 +228,8 @@ void Simulation::step() {
       // The CFD step is a whole number of DEM steps, as large as the fluid allows.
       long long nSub = cfg_.integer("coupling.dem_substeps");
       if (nSub == 0)
-        nSub = std::max<long long>(1, static_cast<long long>(std::floor(fluid_->nextDt() / dem_->dt() + 1e-9)));
+        nSub = std::max<long long>(
+            1, static_cast<long long>(std::floor(fluid_->nextDt() / dem_->dt() + 1e-9)));
       const double dt = static_cast<double>(nSub) * dem_->dt();
       gatherParticles();
       computeStencils();
@@ -299,7 +303,9 @@ void Simulation::gatherParticles() {
   Comm::displacements(X.sendCounts, X.sendDispl);
   std::vector<int>& fill = X.recvDispl;  // scratch: next free row per destination
   fill = X.sendDispl;
-  for (std::size_t i = 0; i < n; ++i) X.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(X.dest[i])]++)] = static_cast<int>(i);
+  for (std::size_t i = 0; i < n; ++i)
+    X.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(X.dest[i])]++)] =
+        static_cast<int>(i);
   if (X.sendBuf.size() < n * kRow) X.sendBuf.resize(n * kRow + n * kRow / 4);
   for (std::size_t k = 0; k < n; ++k) {
     const auto i = static_cast<std::size_t>(X.order[k]);
@@ -323,7 +329,8 @@ void Simulation::gatherParticles() {
   for (auto& c : X.recvCounts) c *= kRow;
   Comm::displacements(X.sendCounts, X.sendDispl);
   const int recvTotal = Comm::displacements(X.recvCounts, X.recvDispl);
-  if (X.recvBuf.size() < static_cast<std::size_t>(recvTotal)) X.recvBuf.resize(static_cast<std::size_t>(recvTotal) + recvTotal / 4);
+  if (X.recvBuf.size() < static_cast<std::size_t>(recvTotal))
+    X.recvBuf.resize(static_cast<std::size_t>(recvTotal) + recvTotal / 4);
   comm.alltoallv(std::span<const double>(X.sendBuf.data(), n * kRow), X.sendCounts, X.sendDispl,
                  std::span<double>(X.recvBuf.data(), static_cast<std::size_t>(recvTotal)),
                  X.recvCounts, X.recvDispl);
@@ -368,7 +375,8 @@ void Simulation::bookProxyTraffic(int valuesPerParticle, double seconds) {
   const int me = dec_.comm().rank();
   long long remote = 0, local = 0, messages = 0;
   for (std::size_t r = 0; r < X.sendCounts.size(); ++r) {
-    const long long bytes = static_cast<long long>(X.sendCounts[r]) * static_cast<long long>(sizeof(double));
+    const long long bytes =
+        static_cast<long long>(X.sendCounts[r]) * static_cast<long long>(sizeof(double));
     if (static_cast<int>(r) == me) {
       local += bytes;
     } else if (bytes > 0) {
@@ -434,7 +442,8 @@ void Simulation::evaluateDrag(double dt) {
       slip2 += s * s;
     }
     const double eps = std::clamp(epsAt_[i], epsMin_, 1.0);
-    const double beta = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
+    const double beta =
+        dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
     if (frozen || dt <= 0) {
       // Particles that cannot move: the plain coefficient and their (zero) velocity.
       beta_[i] = beta;
@@ -649,7 +658,8 @@ Json Simulation::report(double wallSeconds) const {
   out["throughput"] = {
       {"cell_steps_per_s", fluid_ && wall > 0 ? cells * static_cast<double>(steps_) / wall : 0.0},
       {"particle_steps_per_s",
-       dem_ && wall > 0 ? static_cast<double>(particles) * static_cast<double>(substeps_) / wall : 0.0}};
+       dem_ && wall > 0 ? static_cast<double>(particles) * static_cast<double>(substeps_) / wall
+                        : 0.0}};
   out["checks"] = {{"momentum_balance", momentumResidual_}, {"mass_balance", 0.0}};
   if (fluid_) {
     const Json fd = fluid_->diagnostics();
@@ -672,9 +682,10 @@ Json Simulation::report(double wallSeconds) const {
                                     {"cost_per_particle", layouts_.model.perParticle},
                                     {"modelled_imbalance", layouts_.modelledImbalance},
                                     {"uniform_modelled_imbalance", layouts_.uniformImbalance}};
-  if (coupled_) out["coupling"] = {{"solid_volume", solidVolume_},
-                                   {"kernel", kernel_ == KernelKind::Centroid ? "centroid" : "trilinear"},
-                                   {"drag", dragLawName(drag_)}};
+  if (coupled_)
+    out["coupling"] = {{"solid_volume", solidVolume_},
+                       {"kernel", kernel_ == KernelKind::Centroid ? "centroid" : "trilinear"},
+                       {"drag", dragLawName(drag_)}};
   return out;
 }
 

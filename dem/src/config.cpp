@@ -19,8 +19,10 @@ Schema commonSource() {
 }  // namespace
 
 void declareConfig(Schema& s) {
-  s.number("particles.dt", 1e-5, "DEM time step (s); refused above particles.dt_fraction of the "
-           "Rayleigh time (Hertz) or of the collision time (linear)", Range::positive());
+  s.number("particles.dt", 1e-5,
+           "DEM time step (s); refused above particles.dt_fraction of the "
+           "Rayleigh time (Hertz) or of the collision time (linear)",
+           Range::positive());
   s.number("particles.dt_fraction", 0.2,
            "largest allowed dt as a fraction of the Rayleigh time (hertz_mindlin) or of the "
            "linear collision time pi sqrt(m*/k_n) (linear)",

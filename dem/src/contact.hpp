@@ -38,8 +38,8 @@ enum class Model { HertzMindlin, Linear };
 /// Coefficients of one material pair (or particle–wall pair).
 struct PairCoeff {
   double Estar = 0, Gstar = 0;
-  double dampH = 0;    // -2 sqrt(5/6) beta  (Hertz)
-  double dampL = 0;    // -2 beta            (linear)
+  double dampH = 0;  // -2 sqrt(5/6) beta  (Hertz)
+  double dampL = 0;  // -2 beta            (linear)
   double mu = 0, muR = 0;
   double tOverN = 0;      // sqrt(S_t/S_n) = sqrt(4 G*/E*): gamma_t = tOverN * gamma_n (Hertz)
   double kn = 0, kt = 0;  // linear model
@@ -68,7 +68,9 @@ inline PairCoeff mix(const Material& a, const Material& b, double linKn, double 
   return c;
 }
 
-inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline double dot3(const double* a, const double* b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 inline void cross3(const double* a, const double* b, double* c) {
   c[0] = a[1] * b[2] - a[2] * b[1];
   c[1] = a[2] * b[0] - a[0] * b[2];
@@ -137,7 +139,8 @@ inline double contactForce(const PairCoeff& c, double dt, bool update, const dou
 
 /// Elastic energy stored in the normal spring at overlap delta.
 inline double normalEnergy(Model m, const PairCoeff& c, double delta, double Reff) {
-  if (m == Model::HertzMindlin) return (8.0 / 15.0) * c.Estar * std::sqrt(Reff) * std::pow(delta, 2.5);
+  if (m == Model::HertzMindlin)
+    return (8.0 / 15.0) * c.Estar * std::sqrt(Reff) * std::pow(delta, 2.5);
   return 0.5 * c.kn * delta * delta;
 }
 

@@ -26,6 +26,8 @@
 // Ownership follows the bins: a particle belongs to the rank whose bins contain
 // floor((x - origin)/bin) along each axis (clamped into the box). Bin edges coincide with CFD
 // cell edges (a bin is k cells or 1/k cell), so block edges are bin edges.
+#include "coloc/dem/dem.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -33,7 +35,6 @@
 #include <span>
 #include <sstream>
 
-#include "coloc/dem/dem.hpp"
 #include "contact.hpp"
 #include "generate.hpp"
 
@@ -257,11 +258,12 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
   const long long kc = cfg.integer("particles.bin_cells");
   const long long ks = cfg.integer("particles.bin_split");
   if (kc > 0 && ks > 0)
-    throw ConfigError("particles.bin_split", "give particles.bin_cells or particles.bin_split, "
-                                             "not both");
+    throw ConfigError("particles.bin_split",
+                      "give particles.bin_cells or particles.bin_split, "
+                      "not both");
   const auto range = [&] {
-    return "the interaction range " + fmt(rc) + " m (largest diameter " + fmt(dmax) +
-           " m + skin " + fmt(skin) + " m)";
+    return "the interaction range " + fmt(rc) + " m (largest diameter " + fmt(dmax) + " m + skin " +
+           fmt(skin) + " m)";
   };
   for (int d = 0; d < 3; ++d) {
     origin[d] = grid.origin[d];
@@ -295,8 +297,8 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
         while (multiple <= grid.cells[d] && (!divides(multiple) || multiple * h < rc)) ++multiple;
         if (multiple > grid.cells[d])
           throw ConfigError(key, std::string("no bin made of whole cells holds ") + range() +
-                                     " and fits the blocks along " + kAxis[d] +
-                                     " (cell " + fmt(h) + " m): use larger cells or fewer ranks");
+                                     " and fits the blocks along " + kAxis[d] + " (cell " + fmt(h) +
+                                     " m): use larger cells or fewer ranks");
       }
     }
     bs[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
@@ -308,12 +310,15 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
     binHi[d] = split > 1 ? dec.hi()[d] * split : dec.hi()[d] / multiple;
     if (any && periodic[d] && NbG[d] < 2)
       throw ConfigError(key, std::string("a periodic axis needs at least 2 bins (") + kAxis[d] +
-                                 " has " + std::to_string(NbG[d]) + "): the box must be at least "
-                                 "twice " + range());
+                                 " has " + std::to_string(NbG[d]) +
+                                 "): the box must be at least "
+                                 "twice " +
+                                 range());
     nb[d] = static_cast<int>(binHi[d] - binLo[d]);
     nbx[d] = nb[d] + 2;
     lo[d] = origin[d] + static_cast<double>(binLo[d]) * bs[d];
-    hi[d] = binHi[d] == NbG[d] ? origin[d] + L[d] : origin[d] + static_cast<double>(binHi[d]) * bs[d];
+    hi[d] =
+        binHi[d] == NbG[d] ? origin[d] + L[d] : origin[d] + static_cast<double>(binHi[d]) * bs[d];
   }
 }
 
@@ -575,8 +580,8 @@ void DemSolver::Impl::migrate() {
       int dir = 0;
       if (!std::isfinite(x)) {
         if (err.empty())
-          err = "particle " + std::to_string(p.id[i]) + " has a non-finite position at t = " +
-                fmt(time) + " s";
+          err = "particle " + std::to_string(p.id[i]) +
+                " has a non-finite position at t = " + fmt(time) + " s";
       } else if (periodic[d]) {
         const double top = origin[d] + L[d];
         if (x < origin[d]) {
@@ -639,7 +644,8 @@ void DemSolver::Impl::migrate() {
         b.push_back(h1 - h0);
         for (int e = h0; e < h1; ++e) {
           b.push_back(static_cast<double>(hId[static_cast<std::size_t>(e)]));
-          for (int k = 0; k < 3; ++k) b.push_back(hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)]);
+          for (int k = 0; k < 3; ++k)
+            b.push_back(hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)]);
         }
       }
     }
@@ -694,7 +700,8 @@ void DemSolver::Impl::sortByBin() {
     int b[3];
     for (int d = 0; d < 3; ++d)
       b[d] = static_cast<int>(std::clamp(gbinRaw(p.x[d][i], d) - binLo[d], 0LL,
-                                         static_cast<long long>(nb[d] - 1))) + 1;
+                                         static_cast<long long>(nb[d] - 1))) +
+             1;
     const int lb = b[0] + nbx[0] * (b[1] + nbx[1] * b[2]);
     binOf[i] = lb;
     ++binStart[static_cast<std::size_t>(lb) + 1];
@@ -704,16 +711,18 @@ void DemSolver::Impl::sortByBin() {
   perm.resize(n);
   iscr.assign(binStart.begin(), binStart.end() - 1);
   for (std::size_t i = 0; i < n; ++i)
-    perm[static_cast<std::size_t>(iscr[static_cast<std::size_t>(binOf[i])]++)] = static_cast<int>(i);
+    perm[static_cast<std::size_t>(iscr[static_cast<std::size_t>(binOf[i])]++)] =
+        static_cast<int>(i);
   for (std::size_t b = 0; b < nBins; ++b) {
     const int a = binStart[b], e = binStart[b + 1];
     if (e - a > 1)
-      std::sort(perm.begin() + a, perm.begin() + e,
-                [this](int u, int v) { return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)]; });
+      std::sort(perm.begin() + a, perm.begin() + e, [this](int u, int v) {
+        return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)];
+      });
   }
   const auto apply = [&](auto& vec, auto& scratch) {
     ensure(scratch, n);
-  scratch.resize(n);
+    scratch.resize(n);
     for (std::size_t k = 0; k < n; ++k) scratch[k] = vec[static_cast<std::size_t>(perm[k])];
     std::swap(vec, scratch);
   };
@@ -731,7 +740,8 @@ void DemSolver::Impl::sortByBin() {
   }
   // the history rows stay in pre-sort order: buildLists reads row perm[k] for particle k
   for (int d = 0; d < 3; ++d) ensure(x0[d], n);
-  for (int d = 0; d < 3; ++d) x0[d].assign(p.x[d].begin(), p.x[d].begin() + static_cast<std::ptrdiff_t>(n));
+  for (int d = 0; d < 3; ++d)
+    x0[d].assign(p.x[d].begin(), p.x[d].begin() + static_cast<std::ptrdiff_t>(n));
 }
 
 void DemSolver::Impl::buildGhosts() {
@@ -811,7 +821,8 @@ void DemSolver::Impl::updateGhosts() {
         for (int k = 0; k < 3; ++k) o[6 + k] = p.omega[k][u];
         o += kGhostUpdate;
       }
-      rbuf[static_cast<std::size_t>(s)].resize(static_cast<std::size_t>(sw.recvCount) * kGhostUpdate);
+      rbuf[static_cast<std::size_t>(s)].resize(static_cast<std::size_t>(sw.recvCount) *
+                                               kGhostUpdate);
     }
     exchange(d, kTagUpdate + 10 * d, true);
     for (int s = 0; s < 2; ++s) {
@@ -842,7 +853,8 @@ void DemSolver::Impl::buildLists() {
     for (int d = 0; d < 3; ++d) {
       const long long lb = gbinRaw(p.x[d][i], d) - binLo[d];
       b[d] = static_cast<int>(own ? std::clamp(lb, 0LL, static_cast<long long>(nb[d] - 1))
-                                  : std::clamp(lb, -1LL, static_cast<long long>(nb[d]))) + 1;
+                                  : std::clamp(lb, -1LL, static_cast<long long>(nb[d]))) +
+             1;
     }
     binOf[i] = b[0] + nbx[0] * (b[1] + nbx[1] * b[2]);
     ++binStart[static_cast<std::size_t>(binOf[i]) + 1];
@@ -852,7 +864,8 @@ void DemSolver::Impl::buildLists() {
   binItems.resize(nAll);
   iscr.assign(binStart.begin(), binStart.end() - 1);
   for (std::size_t i = 0; i < nAll; ++i)
-    binItems[static_cast<std::size_t>(iscr[static_cast<std::size_t>(binOf[i])]++)] = static_cast<int>(i);
+    binItems[static_cast<std::size_t>(iscr[static_cast<std::size_t>(binOf[i])]++)] =
+        static_cast<int>(i);
   for (std::size_t b = 0; b < nBins; ++b) {
     const int a = binStart[b], e = binStart[b + 1];
     if (e - a > 1 && binItems[static_cast<std::size_t>(e - 1)] >= static_cast<int>(n))
@@ -983,8 +996,8 @@ void DemSolver::Impl::forces(bool update) {
         double nrm[3] = {0, 0, 0};
         nrm[d] = s == 0 ? 1.0 : -1.0;
         const double ws[3] = {ri * wi[0], ri * wi[1], ri * wi[2]};
-        detail::contactForce<M>(wallC[static_cast<std::size_t>(mat[i])], dt, update, nrm, delta,
-                                ri, mi, ri, vi, ws, wi, sh, F, T);
+        detail::contactForce<M>(wallC[static_cast<std::size_t>(mat[i])], dt, update, nrm, delta, ri,
+                                mi, ri, vi, ws, wi, sh, F, T);
         ++nw;
         const double ov = delta / ri;
         if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = -1;
@@ -1022,27 +1035,55 @@ std::size_t DemSolver::Impl::memory() const {
 DemSolver::DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers)
     : impl_(std::make_unique<Impl>(dec, cfg, timers)) {}
 DemSolver::~DemSolver() = default;
-ParticleStore& DemSolver::particles() { return impl_->p; }
-const ParticleStore& DemSolver::particles() const { return impl_->p; }
-void DemSolver::substep() { impl_->substep(); }
-double DemSolver::dt() const { return impl_->dt; }
-double DemSolver::time() const { return impl_->time; }
-void DemSolver::setFrozen(bool frozen) { impl_->frozen = frozen; }
+ParticleStore& DemSolver::particles() {
+  return impl_->p;
+}
+const ParticleStore& DemSolver::particles() const {
+  return impl_->p;
+}
+void DemSolver::substep() {
+  impl_->substep();
+}
+double DemSolver::dt() const {
+  return impl_->dt;
+}
+double DemSolver::time() const {
+  return impl_->time;
+}
+void DemSolver::setFrozen(bool frozen) {
+  impl_->frozen = frozen;
+}
 long long DemSolver::globalCount() const {
   return impl_->comm.sum(static_cast<long long>(impl_->p.nOwned));
 }
-void DemSolver::rebuildNow() { impl_->rebuild(false); }
+void DemSolver::rebuildNow() {
+  impl_->rebuild(false);
+}
 void DemSolver::computeForcesNow() {
   ScopedPhase t(impl_->timers, Phase::DemForce);
   impl_->computeForces(false);
 }
-double DemSolver::interactionRange() const { return impl_->rc; }
-double DemSolver::skin() const { return impl_->skin; }
-std::array<double, 3> DemSolver::binSize() const { return impl_->bs; }
-long long DemSolver::rebuildCount() const { return impl_->rebuilds; }
-std::size_t DemSolver::memoryBytes() const { return impl_->memory(); }
-long long DemSolver::localContacts() const { return impl_->contacts; }
-long long DemSolver::localWallContacts() const { return impl_->wallContacts; }
+double DemSolver::interactionRange() const {
+  return impl_->rc;
+}
+double DemSolver::skin() const {
+  return impl_->skin;
+}
+std::array<double, 3> DemSolver::binSize() const {
+  return impl_->bs;
+}
+long long DemSolver::rebuildCount() const {
+  return impl_->rebuilds;
+}
+std::size_t DemSolver::memoryBytes() const {
+  return impl_->memory();
+}
+long long DemSolver::localContacts() const {
+  return impl_->contacts;
+}
+long long DemSolver::localWallContacts() const {
+  return impl_->wallContacts;
+}
 
 double DemSolver::contactEnergy() const {
   const auto& m = *impl_;
@@ -1058,8 +1099,8 @@ double DemSolver::contactEnergy() const {
         const double rs = p.radius[i] + p.radius[u];
         if (r2 >= rs * rs) continue;
         const auto& c = m.pairC[static_cast<std::size_t>(p.material[i] * m.nMat + p.material[u])];
-        e += 0.5 * detail::normalEnergy(m.model, c, rs - std::sqrt(r2),
-                                        p.radius[i] * p.radius[u] / rs);
+        e += 0.5 *
+             detail::normalEnergy(m.model, c, rs - std::sqrt(r2), p.radius[i] * p.radius[u] / rs);
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
         const double dist = s == 0 ? p.x[d][i] - m.origin[d] : m.origin[d] + m.L[d] - p.x[d][i];
@@ -1075,9 +1116,9 @@ double DemSolver::contactEnergy() const {
 
 Json DemSolver::diagnostics() const {
   const auto& m = *impl_;
-  double loc[6] = {static_cast<double>(m.p.nOwned), static_cast<double>(m.contacts),
+  double loc[6] = {static_cast<double>(m.p.nOwned),     static_cast<double>(m.contacts),
                    static_cast<double>(m.wallContacts), static_cast<double>(m.p.nGhost),
-                   static_cast<double>(m.nbr.size()), static_cast<double>(m.memory())};
+                   static_cast<double>(m.nbr.size()),   static_cast<double>(m.memory())};
   m.comm.sumInPlace(std::span<double>(loc, 6));
   const double n = std::max(1.0, loc[0]);
   Json j;

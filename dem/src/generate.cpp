@@ -9,7 +9,9 @@
 namespace coloc::dem::detail {
 namespace {
 
-std::string srcPath(std::size_t i) { return "particles.sources[" + std::to_string(i) + "]"; }
+std::string srcPath(std::size_t i) {
+  return "particles.sources[" + std::to_string(i) + "]";
+}
 
 std::array<double, 3> vec(const Json& j) {
   return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
@@ -19,8 +21,8 @@ void checkInside(const GlobalGrid& g, const std::array<double, 3>& p, const std:
   for (int d = 0; d < 3; ++d) {
     const double lo = g.origin[d], hi = g.origin[d] + g.length[d];
     if (!(p[d] >= lo && p[d] <= hi))
-      throw ConfigError(key, "point (" + std::to_string(p[0]) + ", " + std::to_string(p[1]) +
-                                 ", " + std::to_string(p[2]) + ") lies outside the box");
+      throw ConfigError(key, "point (" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " +
+                                 std::to_string(p[2]) + ") lies outside the box");
   }
 }
 
@@ -58,7 +60,8 @@ void applySpread(NewParticle& p, const Json& src, std::uint64_t seed) {
 }
 
 /// Site-index range along d that may hold particles of [blockLo, blockHi].
-void siteRange(double lo, double s, long long n, double bLo, double bHi, long long& a, long long& b) {
+void siteRange(double lo, double s, long long n, double bLo, double bHi, long long& a,
+               long long& b) {
   a = std::max(0LL, static_cast<long long>(std::floor((bLo - lo) / s)) - 1);
   b = std::min(n - 1, static_cast<long long>(std::floor((bHi - lo) / s)) + 1);
 }
@@ -95,9 +98,10 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
       if (!vel.empty() && static_cast<long long>(vel.size()) != 3 * info.count)
         throw ConfigError(key + ".velocities", "needs 3 numbers per position");
       for (long long k = 0; k < info.count; ++k)
-        checkInside(grid, {pos[3 * k].get<double>(), pos[3 * k + 1].get<double>(),
-                           pos[3 * k + 2].get<double>()},
-                    key + ".positions");
+        checkInside(
+            grid,
+            {pos[3 * k].get<double>(), pos[3 * k + 1].get<double>(), pos[3 * k + 2].get<double>()},
+            key + ".positions");
     } else if (type == "lattice") {
       const auto lo = vec(src["lo"]);
       const auto sp = vec(src["spacing"]);
@@ -124,8 +128,10 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
       checkInside(grid, vec(src["hi"]), key + ".hi");
       const auto sg = siteGrid(src, 2 * info.rmax * (1 + src["gap"].get<double>()), key);
       if (info.count > sg.total())
-        throw ConfigError(key + ".count", std::to_string(info.count) + " particles do not fit: "
-                                              "the region holds " + std::to_string(sg.total()) +
+        throw ConfigError(key + ".count", std::to_string(info.count) +
+                                              " particles do not fit: "
+                                              "the region holds " +
+                                              std::to_string(sg.total()) +
                                               " sites at this radius and gap");
     }
     out.push_back(info);
@@ -204,7 +210,8 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
       if (!random) ax = src["axis"].get<std::string>()[0] - 'x';
       int o1 = ax == 0 ? 1 : 0, o2 = ax == 2 ? 1 : 2;
       std::array<long long, 3> a{}, b{};
-      for (int d = 0; d < 3; ++d) siteRange(sg.lo[d], sg.s, sg.n[d], blockLo[d], blockHi[d], a[d], b[d]);
+      for (int d = 0; d < 3; ++d)
+        siteRange(sg.lo[d], sg.s, sg.n[d], blockLo[d], blockHi[d], a[d], b[d]);
       for (long long kz = a[2]; kz <= b[2]; ++kz)
         for (long long ky = a[1]; ky <= b[1]; ++ky)
           for (long long kx = a[0]; kx <= b[0]; ++kx) {

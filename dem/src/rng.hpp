@@ -48,7 +48,9 @@ class RandomPermutation {
   }
 
  private:
-  std::uint64_t round(std::uint64_t v, int r) const { return hash3(seed_, static_cast<std::uint64_t>(r), v) & mask_; }
+  std::uint64_t round(std::uint64_t v, int r) const {
+    return hash3(seed_, static_cast<std::uint64_t>(r), v) & mask_;
+  }
   std::uint64_t forward(std::uint64_t x) const {
     std::uint64_t l = x >> half_, r = x & mask_;
     for (int k = 0; k < 4; ++k) {

@@ -49,9 +49,8 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
         f.type = BcType::Wall;
         for (int e = 0; e < 3; ++e) f.velocity[e] = j.at("velocity")[e].get<double>();
         if (f.velocity[d] != 0.0)
-          throw ConfigError(key + ".velocity",
-                            std::string("a wall moves only tangentially: its ") + kAxis[d] +
-                                " component must be 0");
+          throw ConfigError(key + ".velocity", std::string("a wall moves only tangentially: its ") +
+                                                   kAxis[d] + " component must be 0");
       } else if (type == "slip") {
         f.type = BcType::Slip;
       } else {
@@ -59,8 +58,9 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
       }
       const bool periodicBc = f.type == BcType::Periodic;
       if (periodicBc != grid.periodic[d])
-        throw ConfigError(key, std::string("boundary '") + type + "' does not match domain.periodic." +
-                                   kAxis[d] + " = " + (grid.periodic[d] ? "true" : "false") +
+        throw ConfigError(key, std::string("boundary '") + type +
+                                   "' does not match domain.periodic." + kAxis[d] + " = " +
+                                   (grid.periodic[d] ? "true" : "false") +
                                    (grid.periodic[d] ? ": use periodic (or auto)"
                                                      : ": periodic needs domain.periodic." +
                                                            std::string(kAxis[d]) + " = true"));

@@ -30,9 +30,9 @@ enum class BcType { Periodic, Inlet, Outlet, Wall, Slip };
 
 struct FaceBc {
   BcType type = BcType::Wall;
-  Real3 velocity{0, 0, 0};  // inlet velocity, or wall velocity
+  Real3 velocity{0, 0, 0};   // inlet velocity, or wall velocity
   bool superficial = false;  // inlet: velocity is a volume flux per area (u = U / eps)
-  double pressure = 0;      // outlet kinematic pressure
+  double pressure = 0;       // outlet kinematic pressure
 };
 
 /// bc[axis][side]: side 0 = low face, 1 = high face.

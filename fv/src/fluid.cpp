@@ -23,7 +23,8 @@ inline std::ptrdiff_t strideOf(const Field3<double>& f, int e) {
 
 /// Run fn(flatFaceIndex, flatCellIndex) over a box of faces of component d (same (i,j,k)).
 template <class F>
-inline void forFaces(const Field3<double>& u, const Field3<double>& cell, const IndexBox& b, F&& fn) {
+inline void forFaces(const Field3<double>& u, const Field3<double>& cell, const IndexBox& b,
+                     F&& fn) {
   for (int k = b.lo[2]; k < b.hi[2]; ++k)
     for (int j = b.lo[1]; j < b.hi[1]; ++j) {
       const std::ptrdiff_t q0 = u.index(b.lo[0], j, k), c0 = cell.index(b.lo[0], j, k);
@@ -45,7 +46,7 @@ struct FluidSolver::Impl {
   BoxBc bc;
   bool singular = true;  // no Dirichlet pressure face: the pressure is defined up to a constant
   // Work arrays (allocated once).
-  FaceField M;                       // mass fluxes eps_f u
+  FaceField M;                           // mass fluxes eps_f u
   std::array<Field3<double>, 3> Hn, Ho;  // explicit terms at n and n-1
   FaceField uPrev;
   std::vector<double> matrix, rhs, sol;
@@ -79,23 +80,24 @@ struct FluidSolver::Impl {
   void boundaryFluxes(double& in, double& out) const;
 };
 
-FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
-    : dec(d), timers(t) {
+FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t) : dec(d), timers(t) {
   // Setup time is booked by the caller (Timers phases must not nest).
   const auto& grid = dec.grid();
   for (int a = 0; a < 3; ++a) {
     h[a] = grid.spacing(a);
     if (dec.cells()[a] < kGhost)
-      throw ConfigError("partition.dims",
-                        "the fluid needs blocks of at least " + std::to_string(kGhost) +
-                            " cells along every axis; a block has " + std::to_string(dec.cells()[a]) +
-                            " along axis " + std::to_string(a) + ": use fewer ranks along it");
+      throw ConfigError("partition.dims", "the fluid needs blocks of at least " +
+                                              std::to_string(kGhost) +
+                                              " cells along every axis; a block has " +
+                                              std::to_string(dec.cells()[a]) + " along axis " +
+                                              std::to_string(a) + ": use fewer ranks along it");
   }
   for (int a = 0; a < 3; ++a)
     if (grid.periodic[a] && grid.cells[a] < 3)
-      throw ConfigError("domain.cells", std::string("a periodic axis needs at least 3 cells for the "
-                                                    "pressure solver (hypre PFMG); axis ") +
-                                            "xyz"[a] + " has " + std::to_string(grid.cells[a]));
+      throw ConfigError("domain.cells",
+                        std::string("a periodic axis needs at least 3 cells for the "
+                                    "pressure solver (hypre PFMG); axis ") +
+                            "xyz"[a] + " has " + std::to_string(grid.cells[a]));
   nu = cfg.number("fluid.nu");
   dtFixed = cfg.number("fluid.dt");
   adaptive = cfg.boolean("fluid.adaptive_dt");
@@ -191,7 +193,8 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
               row[1 + 2 * a + side] = -w;
             } else {
               row[1 + 2 * a + side] = 0.0;
-              if (bc[a][side].type == BcType::Outlet) w = 2.0 * ef * ef / ((ef + kf * dt) * h[a] * h[a]);
+              if (bc[a][side].type == BcType::Outlet)
+                w = 2.0 * ef * ef / ((ef + kf * dt) * h[a] * h[a]);
             }
             diag += w;
           }
@@ -272,7 +275,10 @@ void FluidSolver::Impl::boundaryFluxes(double& in, double& out) const {
                   ck = s == 0 ? k : k - (a == 2);
         sum += f.eps(ci, cj, ck) * U(i, j, k) * area;  // boundary face eps = cell eps
       });
-      if (s == 0) in += sum; else out += sum;
+      if (s == 0)
+        in += sum;
+      else
+        out += sum;
     }
   }
 }
@@ -361,7 +367,8 @@ void FluidSolver::Impl::step(double dt) {
     for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
   }
 
-  // 3. Pressure equation for q = p dt: sum_f w_f (q_P - q_nb) = -div(eps^{n+1} u*) - (eps^{n+1}-eps^n)/dt.
+  // 3. Pressure equation for q = p dt: sum_f w_f (q_P - q_nb) = -div(eps^{n+1} u*) -
+  // (eps^{n+1}-eps^n)/dt.
   {
     ScopedPhase t(timers, Phase::FluidPressureAssemble);
     if (coefficientsChanged || (anyK && dt != matrixDt) || matrixDt < 0) assembleMatrix(dt);
@@ -533,16 +540,28 @@ FluidFields& FluidSolver::fields() {
   impl_->ratesStale = true;
   return impl_->f;
 }
-const FluidFields& FluidSolver::fields() const { return impl_->f; }
-void FluidSolver::markCoefficientsChanged() { impl_->coefficientsChanged = true; }
-void FluidSolver::step(double dt) { impl_->step(dt); }
+const FluidFields& FluidSolver::fields() const {
+  return impl_->f;
+}
+void FluidSolver::markCoefficientsChanged() {
+  impl_->coefficientsChanged = true;
+}
+void FluidSolver::step(double dt) {
+  impl_->step(dt);
+}
 void FluidSolver::syncEpsOld() {
   auto& f = impl_->f;
   std::copy(f.eps.data().begin(), f.eps.data().end(), f.epsOld.data().begin());
 }
-double FluidSolver::time() const { return impl_->time; }
-double FluidSolver::steadyResidual() const { return impl_->steadyResidual; }
-long long FluidSolver::stepCount() const { return impl_->steps; }
+double FluidSolver::time() const {
+  return impl_->time;
+}
+double FluidSolver::steadyResidual() const {
+  return impl_->steadyResidual;
+}
+long long FluidSolver::stepCount() const {
+  return impl_->steps;
+}
 
 double FluidSolver::nextDt() const {
   auto& m = *impl_;
@@ -629,7 +648,8 @@ void FluidSolver::pressureGradient(std::array<CellField, 3>& out) {
 Json FluidSolver::diagnostics() const {
   const auto& m = *impl_;
   const Comm& comm = m.dec.comm();
-  double v[6] = {m.inLocal, m.outLocal, m.dVolLocal, m.dragLocal[0], m.dragLocal[1], m.dragLocal[2]};
+  double v[6] = {m.inLocal,      m.outLocal,     m.dVolLocal,
+                 m.dragLocal[0], m.dragLocal[1], m.dragLocal[2]};
   comm.sumInPlace(std::span<double>(v, 6));
   const double in = v[0], out = v[1], dvol = v[2];
   const double scale = std::max({std::fabs(in), std::fabs(out), std::fabs(dvol)});

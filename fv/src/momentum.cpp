@@ -43,8 +43,8 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
   const double* md = M[d].data().data();
   const double* ec = eps.data().data();
   double* hp = H.data().data();
-  const std::ptrdiff_t sd = strideOf(Ud, d);      // along d in the layout of component d
-  const std::ptrdiff_t cd = strideOf(eps, d);     // along d in the cell layout
+  const std::ptrdiff_t sd = strideOf(Ud, d);   // along d in the layout of component d
+  const std::ptrdiff_t cd = strideOf(eps, d);  // along d in the cell layout
   // Transverse axes.
   int es[2], ne = 0;
   for (int e = 0; e < 3; ++e)
@@ -55,10 +55,10 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
   double he[2];
   for (int t = 0; t < 2; ++t) {
     const int e = es[t];
-    se[t] = strideOf(Ud, e);              // along e, layout of component d
-    see[t] = strideOf(u[e], e);           // along e, layout of component e
-    sde[t] = strideOf(u[e], d);           // along d, layout of component e
-    ce[t] = strideOf(eps, e);             // along e, cell layout
+    se[t] = strideOf(Ud, e);     // along e, layout of component d
+    see[t] = strideOf(u[e], e);  // along e, layout of component e
+    sde[t] = strideOf(u[e], d);  // along d, layout of component e
+    ce[t] = strideOf(eps, e);    // along e, cell layout
     he[t] = prm.h[e];
   }
   const double ihd = 1.0 / hd;
@@ -67,7 +67,8 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
       const std::ptrdiff_t q0 = Ud.index(box.lo[0], j, k);
       const std::ptrdiff_t c0 = eps.index(box.lo[0], j, k);
       const std::ptrdiff_t h0 = H.index(box.lo[0], j, k);
-      const std::ptrdiff_t qe0[2] = {u[es[0]].index(box.lo[0], j, k), u[es[1]].index(box.lo[0], j, k)};
+      const std::ptrdiff_t qe0[2] = {u[es[0]].index(box.lo[0], j, k),
+                                     u[es[1]].index(box.lo[0], j, k)};
       const int ni = box.hi[0] - box.lo[0];
       for (int i = 0; i < ni; ++i) {
         const std::ptrdiff_t q = q0 + i, c = c0 + i;
@@ -96,9 +97,9 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
           const double eHi = 0.25 * (ec[c + cs] + ec[c + cs - cd] + ec[c] + ec[c - cd]);
           const double tLo =
               nu * eLo * ((ud[q] - ud[q - s]) * ihe + (w[qe] - w[qe - sde[t]]) * ihd);
-          const double tHi = nu * eHi *
-                             ((ud[q + s] - ud[q]) * ihe +
-                              (w[qe + see[t]] - w[qe + see[t] - sde[t]]) * ihd);
+          const double tHi =
+              nu * eHi *
+              ((ud[q + s] - ud[q]) * ihe + (w[qe + see[t]] - w[qe + see[t] - sde[t]]) * ihd);
           visc += (tHi - tLo) * ihe;
         }
         hp[h0 + i] = visc - conv;
@@ -132,9 +133,15 @@ void massFluxes(const FaceField& u, const CellField& eps, FaceField& M) {
 void explicitTerms(int d, const FaceField& u, const FaceField& M, const CellField& eps,
                    const MomentumParams& prm, const IndexBox& box, Field3<double>& H) {
   switch (prm.convection) {
-    case Convection::Central: kernel<Convection::Central>(d, u, M, eps, prm, box, H); break;
-    case Convection::VanLeer: kernel<Convection::VanLeer>(d, u, M, eps, prm, box, H); break;
-    case Convection::Minmod: kernel<Convection::Minmod>(d, u, M, eps, prm, box, H); break;
+    case Convection::Central:
+      kernel<Convection::Central>(d, u, M, eps, prm, box, H);
+      break;
+    case Convection::VanLeer:
+      kernel<Convection::VanLeer>(d, u, M, eps, prm, box, H);
+      break;
+    case Convection::Minmod:
+      kernel<Convection::Minmod>(d, u, M, eps, prm, box, H);
+      break;
   }
 }
 

@@ -49,7 +49,8 @@ PressureSolver::PressureSolver(const Decomposition& dec, Kind kind, double tol, 
   HYPRE_Int offsets[7][3] = {{0, 0, 0}, {-1, 0, 0}, {1, 0, 0}, {0, -1, 0},
                              {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
   check(HYPRE_StructStencilCreate(3, 7, &stencil_), "stencil create");
-  for (int e = 0; e < 7; ++e) check(HYPRE_StructStencilSetElement(stencil_, e, offsets[e]), "stencil");
+  for (int e = 0; e < 7; ++e)
+    check(HYPRE_StructStencilSetElement(stencil_, e, offsets[e]), "stencil");
 
   check(HYPRE_StructMatrixCreate(comm_, grid_, stencil_, &A_), "matrix create");
   check(HYPRE_StructMatrixInitialize(A_), "matrix init");

@@ -13,13 +13,17 @@ namespace {
 class PrefixSum {
  public:
   PrefixSum(const GlobalGrid& g, const std::vector<double>& c)
-      : nx_(g.cells[0] + 1), ny_(g.cells[1] + 1), s_(static_cast<std::size_t>(nx_) * ny_ * (g.cells[2] + 1), 0.0) {
+      : nx_(g.cells[0] + 1),
+        ny_(g.cells[1] + 1),
+        s_(static_cast<std::size_t>(nx_) * ny_ * (g.cells[2] + 1), 0.0) {
     for (int k = 1; k <= g.cells[2]; ++k)
       for (int j = 1; j <= g.cells[1]; ++j)
         for (int i = 1; i <= g.cells[0]; ++i) {
-          const double v = c[static_cast<std::size_t>((i - 1) + g.cells[0] * ((j - 1) + g.cells[1] * (k - 1)))];
-          at(i, j, k) = v + at(i - 1, j, k) + at(i, j - 1, k) + at(i, j, k - 1) - at(i - 1, j - 1, k) -
-                        at(i - 1, j, k - 1) - at(i, j - 1, k - 1) + at(i - 1, j - 1, k - 1);
+          const double v =
+              c[static_cast<std::size_t>((i - 1) + g.cells[0] * ((j - 1) + g.cells[1] * (k - 1)))];
+          at(i, j, k) = v + at(i - 1, j, k) + at(i, j - 1, k) + at(i, j, k - 1) -
+                        at(i - 1, j - 1, k) - at(i - 1, j, k - 1) - at(i, j - 1, k - 1) +
+                        at(i - 1, j - 1, k - 1);
         }
   }
   double box(int i0, int i1, int j0, int j1, int k0, int k1) const {
@@ -29,7 +33,9 @@ class PrefixSum {
 
  private:
   double& at(int i, int j, int k) { return s_[static_cast<std::size_t>(i + nx_ * (j + ny_ * k))]; }
-  double at(int i, int j, int k) const { return s_[static_cast<std::size_t>(i + nx_ * (j + ny_ * k))]; }
+  double at(int i, int j, int k) const {
+    return s_[static_cast<std::size_t>(i + nx_ * (j + ny_ * k))];
+  }
   int nx_, ny_;
   std::vector<double> s_;
 };
@@ -39,7 +45,8 @@ double maxBlock(const PrefixSum& ps, const std::array<std::vector<int>, 3>& c) {
   for (std::size_t a = 0; a + 1 < c[0].size(); ++a)
     for (std::size_t b = 0; b + 1 < c[1].size(); ++b)
       for (std::size_t e = 0; e + 1 < c[2].size(); ++e)
-        worst = std::max(worst, ps.box(c[0][a], c[0][a + 1], c[1][b], c[1][b + 1], c[2][e], c[2][e + 1]));
+        worst = std::max(worst,
+                         ps.box(c[0][a], c[0][a + 1], c[1][b], c[1][b + 1], c[2][e], c[2][e + 1]));
   return worst;
 }
 
@@ -54,7 +61,9 @@ bool feasible(int n, int p, int minCells, int gran) {
 std::vector<int> multisection(const std::vector<double>& marginal, int p, int minCells, int gran) {
   const int n = static_cast<int>(marginal.size());
   std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
-  for (int i = 0; i < n; ++i) prefix[static_cast<std::size_t>(i) + 1] = prefix[static_cast<std::size_t>(i)] + marginal[static_cast<std::size_t>(i)];
+  for (int i = 0; i < n; ++i)
+    prefix[static_cast<std::size_t>(i) + 1] =
+        prefix[static_cast<std::size_t>(i)] + marginal[static_cast<std::size_t>(i)];
   std::vector<int> cuts(static_cast<std::size_t>(p) + 1, 0);
   cuts.back() = n;
   for (int c = 1; c < p; ++c) {
@@ -70,7 +79,8 @@ std::vector<int> multisection(const std::vector<double>& marginal, int p, int mi
   // Repair: forward pass enforces the minimum from the left, backward pass from the right.
   const int minBlock = ((minCells + gran - 1) / gran) * gran;
   for (int c = 1; c < p; ++c)
-    cuts[static_cast<std::size_t>(c)] = std::max(cuts[static_cast<std::size_t>(c)], cuts[static_cast<std::size_t>(c) - 1] + minBlock);
+    cuts[static_cast<std::size_t>(c)] = std::max(cuts[static_cast<std::size_t>(c)],
+                                                 cuts[static_cast<std::size_t>(c) - 1] + minBlock);
   for (int c = p - 1; c >= 1; --c) {
     int limit = cuts[static_cast<std::size_t>(c) + 1] - (c == p - 1 ? minCells : minBlock);
     limit -= limit % gran;
@@ -114,7 +124,8 @@ std::vector<double> cellCosts(const Decomposition& dec, std::span<const double> 
   std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 0.0);
   for (std::size_t p = 0; p < x.size(); ++p) {
     const auto c = dec.cellOfPoint({x[p], y[p], z[p]});
-    cost[static_cast<std::size_t>(c[0] + g.cells[0] * (c[1] + g.cells[1] * c[2]))] += model.perParticle;
+    cost[static_cast<std::size_t>(c[0] + g.cells[0] * (c[1] + g.cells[1] * c[2]))] +=
+        model.perParticle;
   }
   dec.comm().sumInPlace(std::span<double>(cost));
   for (double& c : cost) c += model.perCell;
@@ -136,7 +147,8 @@ BalancedLayout balanceBlocks(const GlobalGrid& grid, const std::vector<double>& 
   for (int k = 0; k < grid.cells[2]; ++k)
     for (int j = 0; j < grid.cells[1]; ++j)
       for (int i = 0; i < grid.cells[0]; ++i) {
-        const double v = cost[static_cast<std::size_t>(i + grid.cells[0] * (j + grid.cells[1] * k))];
+        const double v =
+            cost[static_cast<std::size_t>(i + grid.cells[0] * (j + grid.cells[1] * k))];
         marginal[0][static_cast<std::size_t>(i)] += v;
         marginal[1][static_cast<std::size_t>(j)] += v;
         marginal[2][static_cast<std::size_t>(k)] += v;
@@ -151,13 +163,15 @@ BalancedLayout balanceBlocks(const GlobalGrid& grid, const std::vector<double>& 
       bool ok = true;
       for (int d = 0; d < 3; ++d) {
         if (fixedDims[d] > 0 && fixedDims[d] != dims[d]) ok = false;
-        if (!feasible(grid.cells[d], dims[d], std::min(minCells, grid.cells[d]), granularity)) ok = false;
+        if (!feasible(grid.cells[d], dims[d], std::min(minCells, grid.cells[d]), granularity))
+          ok = false;
       }
       if (!ok) continue;
       BalancedLayout l;
       l.dims = dims;
       for (int d = 0; d < 3; ++d)
-        l.cuts[d] = multisection(marginal[d], dims[d], std::min(minCells, grid.cells[d]), granularity);
+        l.cuts[d] =
+            multisection(marginal[d], dims[d], std::min(minCells, grid.cells[d]), granularity);
       refine(ps, l.cuts, minCells, granularity);
       l.maxBlockCost = maxBlock(ps, l.cuts);
       if (l.maxBlockCost < best.maxBlockCost * (1 - 1e-12)) best = l;

@@ -60,9 +60,9 @@ Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, 
   std::array<std::vector<int>, 3> cuts;
   for (int d = 0; d < 3; ++d) {
     if (dims[d] > grid.cells[d])
-      throw ConfigError("partition.dims",
-                        std::to_string(dims[d]) + " ranks along " + kAxis[d] + " but only " +
-                            std::to_string(grid.cells[d]) + " cells: each block needs a cell");
+      throw ConfigError("partition.dims", std::to_string(dims[d]) + " ranks along " + kAxis[d] +
+                                              " but only " + std::to_string(grid.cells[d]) +
+                                              " cells: each block needs a cell");
     cuts[d] = evenCuts(grid.cells[d], dims[d]);
   }
   return fromCuts(world, grid, std::move(cuts));
@@ -152,7 +152,8 @@ Int3 Decomposition::loOf(int r) const {
 
 Int3 Decomposition::hiOf(int r) const {
   const auto c = coordsOfRank(r);
-  return {cuts_[0][static_cast<std::size_t>(c[0]) + 1], cuts_[1][static_cast<std::size_t>(c[1]) + 1],
+  return {cuts_[0][static_cast<std::size_t>(c[0]) + 1],
+          cuts_[1][static_cast<std::size_t>(c[1]) + 1],
           cuts_[2][static_cast<std::size_t>(c[2]) + 1]};
 }
 

@@ -103,7 +103,9 @@ class Hid {
   herr_t (*close_)(hid_t) = nullptr;
 };
 
-Hid plist(hid_t cls, const char* what) { return Hid(checkId(H5Pcreate(cls), what), H5Pclose); }
+Hid plist(hid_t cls, const char* what) {
+  return Hid(checkId(H5Pcreate(cls), what), H5Pclose);
+}
 
 /// Link creation list that creates missing parent groups.
 Hid parentsLcpl() {
@@ -117,8 +119,10 @@ Hid parentsLcpl() {
 enum class Elem { F64, I64, I32 };
 template <class T>
 constexpr Elem elemOf() {
-  if constexpr (std::is_same_v<T, double>) return Elem::F64;
-  else if constexpr (std::is_same_v<T, std::int64_t>) return Elem::I64;
+  if constexpr (std::is_same_v<T, double>)
+    return Elem::F64;
+  else if constexpr (std::is_same_v<T, std::int64_t>)
+    return Elem::I64;
   else {
     static_assert(std::is_same_v<T, int>, "double, int64 or int");
     return Elem::I32;
@@ -126,25 +130,33 @@ constexpr Elem elemOf() {
 }
 hid_t memType(Elem e) {
   switch (e) {
-    case Elem::F64: return H5T_NATIVE_DOUBLE;
-    case Elem::I64: return H5T_NATIVE_INT64;
-    case Elem::I32: return H5T_NATIVE_INT32;
+    case Elem::F64:
+      return H5T_NATIVE_DOUBLE;
+    case Elem::I64:
+      return H5T_NATIVE_INT64;
+    case Elem::I32:
+      return H5T_NATIVE_INT32;
   }
   return H5T_NATIVE_DOUBLE;
 }
 hid_t fileType(Elem e) {
   switch (e) {
-    case Elem::F64: return H5T_IEEE_F64LE;
-    case Elem::I64: return H5T_STD_I64LE;
-    case Elem::I32: return H5T_STD_I32LE;
+    case Elem::F64:
+      return H5T_IEEE_F64LE;
+    case Elem::I64:
+      return H5T_STD_I64LE;
+    case Elem::I32:
+      return H5T_STD_I32LE;
   }
   return H5T_IEEE_F64LE;
 }
 const char* elemName(Elem e) {
   switch (e) {
-    case Elem::F64: return "float";
+    case Elem::F64:
+      return "float";
     case Elem::I64:
-    case Elem::I32: return "integer";
+    case Elem::I32:
+      return "integer";
   }
   return "?";
 }
@@ -172,7 +184,9 @@ std::string dimsText(const hsize_t* d, int rank) {
   return s + "]";
 }
 
-std::string context(const H5File& f, const std::string& path) { return f.path() + ":" + path; }
+std::string context(const H5File& f, const std::string& path) {
+  return f.path() + ":" + path;
+}
 
 /// Select this rank's part of `fspace` and make the matching memory space.
 Hid selectSlab(hid_t fspace, const Slab& s) {
@@ -225,8 +239,7 @@ Hid mpioFapl(const FlatComm& comm, bool collectiveWrites) {
   Hid fapl = plist(H5P_FILE_ACCESS, "H5Pcreate(fapl)");
   checkErr(H5Pset_fapl_mpio(fapl, comm.get(), MPI_INFO_NULL), "H5Pset_fapl_mpio");
   checkErr(H5Pset_all_coll_metadata_ops(fapl, 1), "H5Pset_all_coll_metadata_ops");
-  if (collectiveWrites)
-    checkErr(H5Pset_coll_metadata_write(fapl, 1), "H5Pset_coll_metadata_write");
+  if (collectiveWrites) checkErr(H5Pset_coll_metadata_write(fapl, 1), "H5Pset_coll_metadata_write");
   return fapl;
 }
 
@@ -256,10 +269,10 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
     Hid dcpl = plist(H5P_DATASET_CREATE, "H5Pcreate(dcpl)");
     checkErr(H5Pset_fill_time(dcpl, H5D_FILL_TIME_NEVER), "H5Pset_fill_time");
     Hid lcpl = parentsLcpl();
-    dset = Hid(checkId(H5Dcreate2(file.id(), path.c_str(), fileType(e), fspace, lcpl, dcpl,
-                                  H5P_DEFAULT),
-                       "H5Dcreate2"),
-               H5Dclose);
+    dset = Hid(
+        checkId(H5Dcreate2(file.id(), path.c_str(), fileType(e), fspace, lcpl, dcpl, H5P_DEFAULT),
+                "H5Dcreate2"),
+        H5Dclose);
     mspace = selectSlab(fspace, s);
     xfer = collectiveXfer();
   });
@@ -295,7 +308,8 @@ void readSlab(H5File& file, const std::string& path, Elem e, const Slab& s, void
     if (rank < 0 || rank > 8) throw LocalFailure("unsupported dataspace");
     H5Sget_simple_extent_dims(fspace, dims.data(), nullptr);
     bool same = rank == s.rank;
-    for (int a = 0; same && a < rank; ++a) same = dims[static_cast<std::size_t>(a)] == s.global[static_cast<std::size_t>(a)];
+    for (int a = 0; same && a < rank; ++a)
+      same = dims[static_cast<std::size_t>(a)] == s.global[static_cast<std::size_t>(a)];
     if (!same)
       throw LocalFailure("shape " + dimsText(dims.data(), rank) + ", expected " +
                          dimsText(s.global.data(), s.rank));
@@ -330,10 +344,10 @@ Slab fieldSlab(const Decomposition& dec, const IndexBox& owned, Int3 globalN, in
 std::string layoutError(const Decomposition& dec, const Field3<double>& f, Int3 stagger) {
   const auto& l = f.layout();
   if (l.n != dec.cells() || l.stagger != stagger)
-    return "field layout does not match this rank's block (owned cells " +
-           std::to_string(l.n[0]) + "x" + std::to_string(l.n[1]) + "x" + std::to_string(l.n[2]) +
-           ", block " + std::to_string(dec.cells()[0]) + "x" + std::to_string(dec.cells()[1]) +
-           "x" + std::to_string(dec.cells()[2]) + ")";
+    return "field layout does not match this rank's block (owned cells " + std::to_string(l.n[0]) +
+           "x" + std::to_string(l.n[1]) + "x" + std::to_string(l.n[2]) + ", block " +
+           std::to_string(dec.cells()[0]) + "x" + std::to_string(dec.cells()[1]) + "x" +
+           std::to_string(dec.cells()[2]) + ")";
   return {};
 }
 
@@ -419,9 +433,9 @@ void writeAttribute(H5File& file, const std::string& object, const std::string& 
     const htri_t has = H5Aexists(obj, name.c_str());
     checkErr(has < 0 ? -1 : 0, "H5Aexists");
     if (has > 0) checkErr(H5Adelete(obj, name.c_str()), "H5Adelete");
-    Hid space(checkId(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr),
-                      "H5Screate"),
-              H5Sclose);
+    Hid space(
+        checkId(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), "H5Screate"),
+        H5Sclose);
     Hid attr(checkId(H5Acreate2(obj, name.c_str(), ftype, space, H5P_DEFAULT, H5P_DEFAULT),
                      "H5Acreate2"),
              H5Aclose);
@@ -457,12 +471,23 @@ std::string xmlEscape(const std::string& s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&apos;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      case '\'':
+        o += "&apos;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -492,8 +517,7 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
   collective(comm, path, [&] {
     Hid fapl = mpioFapl(flat, true);
     id = H5Fcreate(f.writePath_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
-    if (id < 0)
-      throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
+    if (id < 0) throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
   });
   f.id_ = id;
   return f;
@@ -542,7 +566,9 @@ H5File& H5File::operator=(H5File&& o) noexcept {
   return *this;
 }
 
-H5File::~H5File() { release(); }
+H5File::~H5File() {
+  release();
+}
 
 void H5File::release() noexcept {
   if (id_ < 0) return;
@@ -840,8 +866,8 @@ void XdmfSeries::add(XdmfStep s) {
 std::string XdmfSeries::xml() const {
   std::ostringstream o;
   const auto& g = grid_;
-  const std::string cellDims = std::to_string(g.cells[2]) + " " + std::to_string(g.cells[1]) +
-                               " " + std::to_string(g.cells[0]);
+  const std::string cellDims = std::to_string(g.cells[2]) + " " + std::to_string(g.cells[1]) + " " +
+                               std::to_string(g.cells[0]);
   o << "<?xml version=\"1.0\" ?>\n"
     << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
     << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
@@ -852,9 +878,9 @@ std::string XdmfSeries::xml() const {
     const std::string n = std::to_string(s.count);
     auto dataItem = [&](const std::string& dims, const std::string& type, int precision,
                         const std::string& dataset) {
-      o << "     <DataItem Dimensions=\"" << dims << "\" NumberType=\"" << type
-        << "\" Precision=\"" << precision << "\" Format=\"HDF\">" << xmlEscape(s.file) << ":"
-        << xmlEscape(dataset) << "</DataItem>\n";
+      o << "     <DataItem Dimensions=\"" << dims << "\" NumberType=\"" << type << "\" Precision=\""
+        << precision << "\" Format=\"HDF\">" << xmlEscape(s.file) << ":" << xmlEscape(dataset)
+        << "</DataItem>\n";
     };
     o << "   <Grid Name=\"" << xmlEscape(name_) << "_" << s.step << "\" GridType=\"Uniform\">\n"
       << "    <Time Value=\"" << num(s.time) << "\"/>\n";
@@ -870,8 +896,7 @@ std::string XdmfSeries::xml() const {
         << "    <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
         << "     <DataItem Name=\"Origin\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" "
            "Format=\"XML\">"
-        << num(g.origin[2]) << " " << num(g.origin[1]) << " " << num(g.origin[0])
-        << "</DataItem>\n"
+        << num(g.origin[2]) << " " << num(g.origin[1]) << " " << num(g.origin[0]) << "</DataItem>\n"
         << "     <DataItem Name=\"Spacing\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" "
            "Format=\"XML\">"
         << num(g.spacing(2)) << " " << num(g.spacing(1)) << " " << num(g.spacing(0))

@@ -26,7 +26,8 @@ std::size_t pack(std::span<Field3<double>* const> fields, const IndexBox& b, dou
   return n;
 }
 
-void unpack(std::span<Field3<double>* const> fields, const IndexBox& b, const double* in, bool add) {
+void unpack(std::span<Field3<double>* const> fields, const IndexBox& b, const double* in,
+            bool add) {
   std::size_t n = 0;
   for (auto* f : fields) {
     double* dst = f->data().data();
@@ -118,7 +119,8 @@ void HaloPlan::sweep(int d, std::span<Field3<double>* const> fields, bool revers
     const IndexBox& sbox = reverse ? side.ghost : side.ownedEdge;
     const std::size_t count = pack(fields, sbox, sendBuf_[d][s].data());
     const int tag = (s == 0) ? tagDown : tagUp;
-    reqs[nreq++] = comm.isend(std::span<const double>(sendBuf_[d][s].data(), count), side.peer, tag);
+    reqs[nreq++] =
+        comm.isend(std::span<const double>(sendBuf_[d][s].data(), count), side.peer, tag);
     if (side.peer != me_) {
       bytes += static_cast<long long>(count * sizeof(double));
       ++msgs;
@@ -160,8 +162,9 @@ void HaloPlan::fold(int d, std::span<Field3<double>* const> fields) {
         IndexBox layer = all;
         layer.lo[d] = ghostLayer;
         layer.hi[d] = ghostLayer + 1;
-        const std::ptrdiff_t shift =
-            (ownedLayer - ghostLayer) * (d == 0 ? 1 : d == 1 ? f->strideY() : f->strideZ());
+        const std::ptrdiff_t shift = (ownedLayer - ghostLayer) * (d == 0   ? 1
+                                                                  : d == 1 ? f->strideY()
+                                                                           : f->strideZ());
         double* p = f->data().data();
         forBox(*f, layer, [&](std::size_t idx) {
           p[static_cast<std::ptrdiff_t>(idx) + shift] += p[idx];

@@ -20,10 +20,12 @@ void declareDomainConfig(Schema& s) {
            Range::nonNegative());
   s.integer("partition.calibrate_steps", 0,
             "balanced: measure the two costs over this many steps on uniform blocks first "
-            "(0: use partition.cost.*)", Range::nonNegative());
+            "(0: use partition.cost.*)",
+            Range::nonNegative());
   s.intVec3("partition.dem_dims", std::array<long long, 3>{0, 0, 0},
             "independent: the DEM's process grid (0: balanced by particle count on a grid other "
-            "than the fluid's)", Range::nonNegative());
+            "than the fluid's)",
+            Range::nonNegative());
   s.intVec3("partition.dims", std::array<long long, 3>{0, 0, 0},
             "process grid; 0 along an axis lets MPI_Dims_create choose", Range::nonNegative());
 }
@@ -44,8 +46,9 @@ GlobalGrid gridFromConfig(const Config& cfg) {
 
 Decomposition decompositionFromConfig(const Comm& world, const Config& cfg) {
   const auto d = cfg.intVec3("partition.dims");
-  return Decomposition::uniform(world, gridFromConfig(cfg),
-                                {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])});
+  return Decomposition::uniform(
+      world, gridFromConfig(cfg),
+      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])});
 }
 
 }  // namespace coloc

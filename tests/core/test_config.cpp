@@ -37,7 +37,8 @@ std::string errorOf(const std::string& text, std::vector<std::string> overrides 
 
 TEST(Config, DefaultsCommentsAndTypes) {
   const auto cfg = Config::fromText(R"(// a comment
-    { /* block */ "domain": { "length": [1, 2, 3] } })", "c", {}, schema());
+    { /* block */ "domain": { "length": [1, 2, 3] } })",
+                                    "c", {}, schema());
   EXPECT_DOUBLE_EQ(cfg.number("fluid.nu"), 1e-6);
   EXPECT_EQ(cfg.integer("run.steps"), 10);
   EXPECT_EQ(cfg.string("run.mode"), "coupled");
@@ -46,10 +47,9 @@ TEST(Config, DefaultsCommentsAndTypes) {
 }
 
 TEST(Config, OverridesApplyBeforeValidation) {
-  const auto cfg = Config::fromText(R"({ "domain": { "length": [1, 2, 3] } })", "c",
-                                    {"run.steps=42", "run.mode=fluid", "domain.length=[4,5,6]",
-                                     "fluid.nu=2.5e-5"},
-                                    schema());
+  const auto cfg = Config::fromText(
+      R"({ "domain": { "length": [1, 2, 3] } })", "c",
+      {"run.steps=42", "run.mode=fluid", "domain.length=[4,5,6]", "fluid.nu=2.5e-5"}, schema());
   EXPECT_EQ(cfg.integer("run.steps"), 42);
   EXPECT_EQ(cfg.string("run.mode"), "fluid");
   EXPECT_EQ(cfg.vec3("domain.length")[0], 4.0);

@@ -69,8 +69,8 @@ TEST_P(Ergun, BedPressureGradient) {
   const double ergun = 150.0 * kMu * (1 - eps) * (1 - eps) * u / (eps * eps * eps * kD * kD) +
                        1.75 * kRho * (1 - eps) * u * u / (eps * eps * eps * kD);
   if (dec.comm().isRoot())
-    std::printf("Ergun bed U = %g m/s: eps %.4f, -dP/dx %.6g Pa/m, Ergun %.6g Pa/m, ratio %.4f\n", u,
-                eps, measured, ergun, measured / ergun);
+    std::printf("Ergun bed U = %g m/s: eps %.4f, -dP/dx %.6g Pa/m, Ergun %.6g Pa/m, ratio %.4f\n",
+                u, eps, measured, ergun, measured / ergun);
   EXPECT_NEAR(eps, 0.40, 0.005);
   EXPECT_NEAR(measured / ergun, 1.0, 0.05)
       << "U = " << u << " eps = " << eps << " measured " << measured << " Pa/m, Ergun " << ergun;

@@ -64,9 +64,10 @@ TEST(FluidisedBed, PressureDropEqualsBuoyantWeight) {
   bedTop = dec.comm().max(bedTop);
   const double dp = sum / samples;
   if (dec.comm().isRoot())
-    std::printf("fluidised bed: mean dP %.3f Pa, buoyant weight / area %.3f Pa, ratio %.4f, "
-                "highest particle at %.1f mm\n",
-                dp, weight, dp / weight, 1e3 * bedTop);
+    std::printf(
+        "fluidised bed: mean dP %.3f Pa, buoyant weight / area %.3f Pa, ratio %.4f, "
+        "highest particle at %.1f mm\n",
+        dp, weight, dp / weight, 1e3 * bedTop);
   EXPECT_EQ(sim.particles()->globalCount(), 1500);
   EXPECT_LT(bedTop, 0.095);  // the bed stays in the column
   EXPECT_NEAR(dp / weight, 1.0, 0.03);

@@ -75,9 +75,10 @@ TEST(Settling, DiFeliceTerminalVelocityAtReTen) {
   double lo = 1e-6, hi = 1.0;
   for (int it = 0; it < 200; ++it) (balance(0.5 * (lo + hi)) > 0 ? lo : hi) = 0.5 * (lo + hi);
   const double vt = 0.5 * (lo + hi);
-  const double tau = rhoP * vp / coupling::dragCoefficient(coupling::DragLaw::DiFelice, 1.0, d, vt,
-                                                           rhoF, nu);
-  const double v = settle(settlingCase(d, rhoP, 100 * d, tau / 10, tau / 200, "difelice", 12 * tau));
+  const double tau =
+      rhoP * vp / coupling::dragCoefficient(coupling::DragLaw::DiFelice, 1.0, d, vt, rhoF, nu);
+  const double v =
+      settle(settlingCase(d, rhoP, 100 * d, tau / 10, tau / 200, "difelice", 12 * tau));
   std::printf("Di Felice settling: v = %.6e m/s, force balance %.6e m/s, ratio %.5f, Re %.2f\n", v,
               vt, v / vt, vt * d / nu);
   EXPECT_NEAR(v / vt, 1.0, 0.02) << "v = " << v << ", force balance " << vt << ", Re "

@@ -41,7 +41,9 @@ void ownedParticles(const Decomposition& dec, std::vector<double>& x, std::vecto
   }
 }
 
-double field(int gi, int gj, int gk) { return std::sin(0.7 * gi + 0.3) + 0.5 * gj - 0.25 * gk * gk; }
+double field(int gi, int gj, int gk) {
+  return std::sin(0.7 * gi + 0.3) + 0.5 * gj - 0.25 * gk * gk;
+}
 
 class KernelTest : public ::testing::TestWithParam<KernelKind> {};
 
@@ -157,7 +159,8 @@ TEST_P(KernelTest, DepositedFieldIsIndependentOfTheRankCount) {
   {
     const auto one = Decomposition::uniform(Comm(self), grid());
     const auto b = globalDeposit(one, true);
-    for (std::size_t c = 0; c < a.size(); ++c) ASSERT_NEAR(a[c], b[c], 1e-12 * (1.0 + std::abs(b[c]))) << c;
+    for (std::size_t c = 0; c < a.size(); ++c)
+      ASSERT_NEAR(a[c], b[c], 1e-12 * (1.0 + std::abs(b[c]))) << c;
   }
   MPI_Comm_free(&self);
 }

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <memory>
 #include <span>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include "coloc/core/run_config.hpp"
 #include "coloc/dem/dem.hpp"

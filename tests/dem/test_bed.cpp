@@ -46,13 +46,14 @@ TEST(DemCollective, PouredBedSolidFraction) {
   const double ke = run.kinetic() / 1500.0;
   const auto diag = run.dem->diagnostics();
   if (run.dec.comm().isRoot())
-    std::printf("poured bed: height %.4f m, core solid fraction %.4f, kinetic energy per particle "
-                "%.3e J, contacts/particle %.2f\n",
-                top, phi, ke, diag["contacts_per_particle"].get<double>());
+    std::printf(
+        "poured bed: height %.4f m, core solid fraction %.4f, kinetic energy per particle "
+        "%.3e J, contacts/particle %.2f\n",
+        top, phi, ke, diag["contacts_per_particle"].get<double>());
   EXPECT_GT(b - a, 5 * d);
   EXPECT_GE(phi, 0.57);  // reference range [0.57, 0.64]
   EXPECT_LE(phi, 0.64);
-  EXPECT_LT(ke, 1e-9);   // settled: mean kinetic energy tiny against m g d = 1.3e-8 J
+  EXPECT_LT(ke, 1e-9);  // settled: mean kinetic energy tiny against m g d = 1.3e-8 J
 }
 
 }  // namespace

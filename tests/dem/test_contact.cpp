@@ -37,7 +37,8 @@ Impact collide(bool wall, double e, const std::string& model = "hertz_mindlin") 
     << " \"linear\": {\"kn\": 2e4}, \"walls\": " << (wall ? "true" : "false") << ","
     << " \"materials\": [" << material(e, 0.0) << "], \"sources\": [{\"type\": \"list\", ";
   if (wall)
-    c << "\"positions\": [0.1, 0.1, 0.0105], \"radius\": " << kR << ", \"velocity\": [0, 0, " << -kV << "]}]}}";
+    c << "\"positions\": [0.1, 0.1, 0.0105], \"radius\": " << kR << ", \"velocity\": [0, 0, " << -kV
+      << "]}]}}";
   else
     c << "\"positions\": [0.0895, 0.1, 0.1, 0.1105, 0.1, 0.1], \"radius\": " << kR
       << ", \"velocities\": [" << 0.5 * kV << ", 0, 0, " << -0.5 * kV << ", 0, 0]}]}}";
@@ -60,11 +61,15 @@ Impact collide(bool wall, double e, const std::string& model = "hertz_mindlin") 
   EXPECT_GT(t0, 0.0);
   EXPECT_GT(t1, t0);
   for (int step = 0; step < 10; ++step) run.dem->substep();  // well clear of the contact
-  return {-relVel() / kV, t1 - t0};  // rebound speed / impact speed
+  return {-relVel() / kV, t1 - t0};                          // rebound speed / impact speed
 }
 
-double mass() { return kRho * 4.0 / 3.0 * M_PI * kR * kR * kR; }
-double estar() { return 1.0 / (2 * (1 - kNu * kNu) / kE); }
+double mass() {
+  return kRho * 4.0 / 3.0 * M_PI * kR * kR * kR;
+}
+double estar() {
+  return 1.0 / (2 * (1 - kNu * kNu) / kE);
+}
 
 TEST(DemContact, SphereSphereRestitution) {
   for (double e : {0.9, 0.5}) {
@@ -101,8 +106,8 @@ TEST(DemContact, HertzDurationElastic) {
   const double tWall = 2.87 * std::pow(m * m / (kR * Es * Es * kV), 0.2);
   const auto a = collide(false, 1.0);
   const auto b = collide(true, 1.0);
-  std::printf("elastic: pair t=%.6e (ref %.6e) e=%.6f, wall t=%.6e (ref %.6e) e=%.6f\n",
-              a.duration, tPair, a.restitution, b.duration, tWall, b.restitution);
+  std::printf("elastic: pair t=%.6e (ref %.6e) e=%.6f, wall t=%.6e (ref %.6e) e=%.6f\n", a.duration,
+              tPair, a.restitution, b.duration, tWall, b.restitution);
   EXPECT_NEAR(a.duration, tPair, 0.03 * tPair);  // tolerance 3 %
   EXPECT_NEAR(b.duration, tWall, 0.03 * tWall);
   EXPECT_NEAR(a.restitution, 1.0, 1e-3);

@@ -1,5 +1,6 @@
 // Collective behaviour (issue 4):
-//  - elastic frictionless gas (e = 1, mu = 0, Hertz; dt ~ 1/100 of a contact), periodic box: total energy (kinetic +
+//  - elastic frictionless gas (e = 1, mu = 0, Hertz; dt ~ 1/100 of a contact), periodic box: total
+//  energy (kinetic +
 //    elastic energy of the contacts) drifts by less than 1e-5 relative over 10^4 steps;
 #include <gtest/gtest.h>
 
@@ -33,9 +34,11 @@ TEST(DemCollective, ElasticGasEnergy) {
   }
   contactsSeen = run.dec.comm().sum(contactsSeen);
   if (run.dec.comm().isRoot())
-    std::printf("elastic gas: max |E - E0|/E0 over 1e4 steps = %.3e (%lld contact-steps, %lld "
-                "rebuilds)\n", worst, contactsSeen / 2, run.dem->rebuildCount());
-  EXPECT_LT(worst, 1e-5);  // tolerance 1e-5 relative
+    std::printf(
+        "elastic gas: max |E - E0|/E0 over 1e4 steps = %.3e (%lld contact-steps, %lld "
+        "rebuilds)\n",
+        worst, contactsSeen / 2, run.dem->rebuildCount());
+  EXPECT_LT(worst, 1e-5);         // tolerance 1e-5 relative
   EXPECT_GT(contactsSeen, 1000);  // the gas collides
 }
 

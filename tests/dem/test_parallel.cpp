@@ -78,14 +78,15 @@ TEST(DemParallel, GasMatchesSerial) {
   const double rel = maxDx / 0.04;
   const auto diag = par.dem->diagnostics();
   if (par.dec.comm().isRoot())
-    std::printf("ranks %d: max |x_par - x_serial|/L = %.3e, particles that changed rank %ld, "
-                "rebuilds %lld, contacts/particle %.3f, |dP|/sum m|v| = %.3e\n",
-                par.dec.size(), rel, moved, par.dem->rebuildCount(),
-                diag["contacts_per_particle"].get<double>(),
-                std::hypot(P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2]) / scale0);
+    std::printf(
+        "ranks %d: max |x_par - x_serial|/L = %.3e, particles that changed rank %ld, "
+        "rebuilds %lld, contacts/particle %.3f, |dP|/sum m|v| = %.3e\n",
+        par.dec.size(), rel, moved, par.dem->rebuildCount(),
+        diag["contacts_per_particle"].get<double>(),
+        std::hypot(P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2]) / scale0);
   EXPECT_EQ(par.dem->globalCount(), n);
-  EXPECT_EQ(missing, 0);        // every id exactly once
-  EXPECT_LE(rel, 1e-10);        // reference: the serial run; tolerance 1e-10 relative
+  EXPECT_EQ(missing, 0);  // every id exactly once
+  EXPECT_LE(rel, 1e-10);  // reference: the serial run; tolerance 1e-10 relative
   EXPECT_GT(par.dem->rebuildCount(), 0);
   if (par.dec.size() > 1) {
     EXPECT_GT(moved, 100);  // the case really migrates particles
@@ -112,8 +113,8 @@ std::string slidingCase() {
       "materials": [{"density": 2500, "young": 1e7, "poisson": 0.3, "restitution": 0.5,
                      "friction": 0.4}],
       "sources": [{"type": "list", "radius": 0.005,
-                   "positions": [0.155, 0.02, )" << z << ", 0.165, 0.02, " << z
-    << ", 0.235, 0.02, " << z << R"(],
+                   "positions": [0.155, 0.02, )"
+    << z << ", 0.165, 0.02, " << z << ", 0.235, 0.02, " << z << R"(],
                    "velocities": [0.4, 0.2, 0, 0.4, -0.2, 0, 0.3, 0, 0]}]}})";
   return c.str();
 }
@@ -152,11 +153,12 @@ TEST(DemParallel, SlidingContactAcrossFace) {
   }
   const auto ts = demtest::table(ser, 3);
   if (par.dec.comm().isRoot())
-    std::printf("ranks %d: %ld of %ld sampled values differ from serial; A,B on different ranks "
-                "in %d samples, same rank in %d; A moved %.4f m, C moved %.4f m\n",
-                par.dec.size(), differing, compared, split, joined, ts[1] - 0.155, ts[21] - 0.235);
-  EXPECT_EQ(differing, 0);  // reference: serial run; tolerance: exact
-  EXPECT_GT(ts[1] - 0.155, 0.01);  // A crossed x = 0.16
+    std::printf(
+        "ranks %d: %ld of %ld sampled values differ from serial; A,B on different ranks "
+        "in %d samples, same rank in %d; A moved %.4f m, C moved %.4f m\n",
+        par.dec.size(), differing, compared, split, joined, ts[1] - 0.155, ts[21] - 0.235);
+  EXPECT_EQ(differing, 0);          // reference: serial run; tolerance: exact
+  EXPECT_GT(ts[1] - 0.155, 0.01);   // A crossed x = 0.16
   EXPECT_GT(ts[21] - 0.235, 0.01);  // C crossed x = 0.24
   if (par.dec.size() > 1) {
     EXPECT_GT(split, 0);

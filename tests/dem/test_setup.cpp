@@ -8,8 +8,9 @@
 
 namespace {
 
-std::string caseText(const std::string& particles, const std::string& domain =
-                                                       R"("length": [0.1, 0.1, 0.1], "cells": [10, 10, 10])") {
+std::string caseText(
+    const std::string& particles,
+    const std::string& domain = R"("length": [0.1, 0.1, 0.1], "cells": [10, 10, 10])") {
   return "{\"domain\": {" + domain + "}, \"particles\": {" + particles + "}}";
 }
 
@@ -30,18 +31,18 @@ std::string failure(const std::string& text, int steps = 0) {
 
 TEST(DemSetup, BinSmallerThanInteractionRange) {
   // cells of 5 mm, particles of 4 mm diameter: range 4.8 mm; a bin of 1/2 cell is too small
-  const auto msg = failure<coloc::ConfigError>(caseText(
-      kMat + R"(, "dt": 1e-6, "bin_split": 2, "sources": [{"type": "list",
+  const auto msg = failure<coloc::ConfigError>(
+      caseText(kMat + R"(, "dt": 1e-6, "bin_split": 2, "sources": [{"type": "list",
       "positions": [0.05, 0.05, 0.05], "radius": 0.002}])",
-      R"("length": [0.1, 0.1, 0.1], "cells": [20, 20, 20])"));
+               R"("length": [0.1, 0.1, 0.1], "cells": [20, 20, 20])"));
   EXPECT_NE(msg.find("particles.bin_split"), std::string::npos) << msg;
   EXPECT_NE(msg.find("smaller than the interaction range"), std::string::npos) << msg;
 }
 
 TEST(DemSetup, BinNotMatchingBlocks) {
   // 10 cells per axis cannot be cut into bins of 3 cells
-  const auto msg = failure<coloc::ConfigError>(caseText(
-      kMat + R"(, "dt": 1e-6, "bin_cells": 3, "sources": [{"type": "list",
+  const auto msg = failure<coloc::ConfigError>(
+      caseText(kMat + R"(, "dt": 1e-6, "bin_cells": 3, "sources": [{"type": "list",
       "positions": [0.05, 0.05, 0.05], "radius": 0.002}])"));
   EXPECT_NE(msg.find("particles.bin_cells"), std::string::npos) << msg;
   EXPECT_NE(msg.find("block edge"), std::string::npos) << msg;
@@ -57,8 +58,8 @@ TEST(DemSetup, AutomaticBinsCoincideWithCells) {
 }
 
 TEST(DemSetup, TimeStepAboveRayleighLimit) {
-  const auto msg = failure<coloc::ConfigError>(caseText(
-      kMat + R"(, "dt": 1e-3, "sources": [{"type": "list", "positions": [0.05, 0.05, 0.05],
+  const auto msg = failure<coloc::ConfigError>(
+      caseText(kMat + R"(, "dt": 1e-3, "sources": [{"type": "list", "positions": [0.05, 0.05, 0.05],
       "radius": 0.002}])"));
   EXPECT_NE(msg.find("particles.dt"), std::string::npos) << msg;
   EXPECT_NE(msg.find("Rayleigh time"), std::string::npos) << msg;
@@ -67,17 +68,16 @@ TEST(DemSetup, TimeStepAboveRayleighLimit) {
 
 TEST(DemSetup, ParticleLeavingTheBoxStopsEveryRank) {
   // walls off: a fast particle crosses the high x face; only its owner sees it
-  const auto msg = failure(caseText(
-      kMat + R"(, "dt": 1e-5, "walls": false, "sources": [{"type": "list",
+  const auto msg =
+      failure(caseText(kMat + R"(, "dt": 1e-5, "walls": false, "sources": [{"type": "list",
       "positions": [0.09, 0.02, 0.02, 0.02, 0.02, 0.02], "radius": 0.002,
       "velocities": [50, 0, 0, 0, 0, 0]}])"),
-      100);
+              100);
   EXPECT_NE(msg.find("left the box"), std::string::npos) << msg;
 }
 
 TEST(DemSetup, OverlapBeyondLimitStopsEveryRank) {
-  const auto msg = failure(caseText(
-      kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
+  const auto msg = failure(caseText(kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
       "positions": [0.08, 0.08, 0.08, 0.0828, 0.08, 0.08], "radius": 0.002}])"));
   EXPECT_NE(msg.find("overlaps particle"), std::string::npos) << msg;
   EXPECT_NE(msg.find("overlap_limit"), std::string::npos) << msg;
@@ -96,9 +96,11 @@ TEST(DemSetup, SourceErrors) {
 }
 
 TEST(DemSetup, FrozenParticlesDoNotMove) {
-  demtest::Case c("{\"gravity\": [0, 0, -9.81], \"domain\": {\"length\": [0.1, 0.1, 0.1], "
-                  "\"cells\": [10, 10, 10]}, \"particles\": {" + kMat +
-                  R"(, "dt": 1e-6, "sources": [{"type": "lattice", "lo": [0.01, 0.01, 0.01],
+  demtest::Case c(
+      "{\"gravity\": [0, 0, -9.81], \"domain\": {\"length\": [0.1, 0.1, 0.1], "
+      "\"cells\": [10, 10, 10]}, \"particles\": {" +
+      kMat +
+      R"(, "dt": 1e-6, "sources": [{"type": "lattice", "lo": [0.01, 0.01, 0.01],
                   "counts": [5, 5, 5], "spacing": [0.005, 0.005, 0.005], "radius": 0.002,
                   "velocity": [1, 0, 0]}]}})");
   c.dem->setFrozen(true);

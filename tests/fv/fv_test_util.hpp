@@ -23,7 +23,8 @@ inline coloc::Schema schema() {
   return s;
 }
 
-inline coloc::Config config(const std::string& json, const std::vector<std::string>& overrides = {}) {
+inline coloc::Config config(const std::string& json,
+                            const std::vector<std::string>& overrides = {}) {
   return coloc::Config::fromText(json, "test", overrides, schema());
 }
 

@@ -6,8 +6,8 @@
 //    faces equals d/dt int eps dV (= 0 here) to <= 1e-10 relative, every step.
 //  - Fully developed flow: centreline velocity / mean velocity vs the series solution of the
 //    laminar square duct (e.g. White, Viscous Fluid Flow, eq. 3-48, with a = b):
-//      u(y,z) = 16 a^2 G/(mu pi^3) sum_{n odd} (-1)^((n-1)/2) n^-3 [1 - cosh(n pi z/2a)/cosh(n pi/2)] cos(n pi y/2a)
-//      Q      = 4 a^4 G/(3 mu) [1 - 192/pi^5 sum_{n odd} n^-5 tanh(n pi/2)]
+//      u(y,z) = 16 a^2 G/(mu pi^3) sum_{n odd} (-1)^((n-1)/2) n^-3 [1 - cosh(n pi z/2a)/cosh(n
+//      pi/2)] cos(n pi y/2a) Q      = 4 a^4 G/(3 mu) [1 - 192/pi^5 sum_{n odd} n^-5 tanh(n pi/2)]
 //    giving u_c / U_mean = 2.0962; required within 1 %.
 #include <gtest/gtest.h>
 
@@ -39,8 +39,9 @@ TEST(FvChannel, DevelopingDuctMassBalanceAndCentreline) {
   const double D = 1.0, U = 1.0, L = nx * D / N;
   const std::string text = R"({
     "run": {"mode": "fluid"},
-    "domain": {"length": [)" + std::to_string(L) + R"(, 1.0, 1.0], "cells": [)" + std::to_string(nx) + ", " +
-                           std::to_string(N) + ", " + std::to_string(N) + R"(]},
+    "domain": {"length": [)" +
+                           std::to_string(L) + R"(, 1.0, 1.0], "cells": [)" + std::to_string(nx) +
+                           ", " + std::to_string(N) + ", " + std::to_string(N) + R"(]},
     "fluid": {"nu": 0.1, "convection": "tvd", "adaptive_dt": true, "dt": 1.0, "cfl": 0.5,
               "pressure": {"tol": 1e-12},
               "boundary": {"xlo": {"type": "inlet", "velocity": [1.0, 0, 0]},
@@ -78,8 +79,11 @@ TEST(FvChannel, DevelopingDuctMassBalanceAndCentreline) {
   uc = dec.comm().sum(uc);
   const double ref = seriesCentrelineRatio();
   if (dec.comm().isRoot())
-    std::printf("duct: t = %g, dt %g, %lld steps, worst mass balance %.2e, u_c/U = %.5f, series %.5f, error %.3f %%\n",
-                d["fluid"]["time"].get<double>(), d["fluid"]["dt_last"].get<double>(), steps + 1, worstBalance, uc / U, ref, 100 * std::fabs(uc / U - ref) / ref);
+    std::printf(
+        "duct: t = %g, dt %g, %lld steps, worst mass balance %.2e, u_c/U = %.5f, series %.5f, "
+        "error %.3f %%\n",
+        d["fluid"]["time"].get<double>(), d["fluid"]["dt_last"].get<double>(), steps + 1,
+        worstBalance, uc / U, ref, 100 * std::fabs(uc / U - ref) / ref);
   EXPECT_NEAR(ref, 2.0962, 1e-4);
   EXPECT_LE(std::fabs(uc / U - ref) / ref, 0.01);
 }

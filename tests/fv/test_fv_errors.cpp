@@ -25,7 +25,8 @@ const char* kBox = R"({"domain": {"length": [1, 1, 1], "cells": [8, 6, 4], "peri
 }  // namespace
 
 TEST(FvErrors, PeriodicMismatchNamesTheKey) {
-  const std::string e = errorOf(kBox, {R"(fluid.boundary.zlo={"type":"inlet","velocity":[0,0,1]})"});
+  const std::string e =
+      errorOf(kBox, {R"(fluid.boundary.zlo={"type":"inlet","velocity":[0,0,1]})"});
   EXPECT_NE(e.find("fluid.boundary.zlo"), std::string::npos) << e;
   EXPECT_NE(e.find("domain.periodic.z"), std::string::npos) << e;
   const std::string e2 = errorOf(kBox, {R"(fluid.boundary.xhi={"type":"periodic"})"});
@@ -48,8 +49,8 @@ TEST(FvErrors, CflAboveHardLimitStopsWithStepCellValue) {
 }
 
 TEST(FvErrors, NonFiniteVelocityStops) {
-  const std::string e = errorOf(kBox, {"fluid.body_force=[1e308, 0, 0]", "fluid.dt=1e10",
-                                       "fluid.cfl_max=1e300"});
+  const std::string e =
+      errorOf(kBox, {"fluid.body_force=[1e308, 0, 0]", "fluid.dt=1e10", "fluid.cfl_max=1e300"});
   EXPECT_NE(e.find("fluid step 1: non-finite velocity"), std::string::npos) << e;
   EXPECT_NE(e.find("at cell ("), std::string::npos) << e;
 }

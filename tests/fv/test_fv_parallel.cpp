@@ -70,7 +70,8 @@ void compare(const Decomposition& pa, const Field3<double>& a, const Decompositi
              const Field3<double>& b, const IndexBox& owned, double& diff, double& ref) {
   forEach(owned, [&](int i, int j, int k) {
     const double va = a(i, j, k);
-    const double vb = b(i + pa.lo()[0] - pb.lo()[0], j + pa.lo()[1] - pb.lo()[1], k + pa.lo()[2] - pb.lo()[2]);
+    const double vb =
+        b(i + pa.lo()[0] - pb.lo()[0], j + pa.lo()[1] - pb.lo()[1], k + pa.lo()[2] - pb.lo()[2]);
     diff = std::max(diff, std::fabs(va - vb));
     ref = std::max(ref, std::fabs(vb));
   });
@@ -151,7 +152,8 @@ TEST(FvParallel, SameFieldsAsSerialAndContinuityWithMovingEps) {
   for (int c = 0; c < 3; ++c) check("cell velocity", par.uc[c], ser.uc[c], cells);
   for (int c = 0; c < 3; ++c) check("pressure gradient", par.gp[c], ser.gp[c], cells);
   if (world.isRoot())
-    std::printf("%d ranks: worst relative difference to serial %.2e; worst continuity residual "
-                "/ flux scale %.2e (tol %.0e)\n",
-                world.size(), worst, worstCont, kTol);
+    std::printf(
+        "%d ranks: worst relative difference to serial %.2e; worst continuity residual "
+        "/ flux scale %.2e (tol %.0e)\n",
+        world.size(), worst, worstCont, kTol);
 }

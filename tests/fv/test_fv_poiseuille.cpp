@@ -16,7 +16,8 @@ double poiseuilleError(int ny) {
   const double h = H / ny;
   const std::string text = R"({
     "run": {"mode": "fluid"},
-    "domain": {"length": [)" + std::to_string(3 * h) + ", 1.0, " + std::to_string(3 * h) +
+    "domain": {"length": [)" +
+                           std::to_string(3 * h) + ", 1.0, " + std::to_string(3 * h) +
                            R"(], "cells": [3, )" + std::to_string(ny) + R"(, 3],
                "periodic": {"x": true, "z": true}},
     "partition": {"dims": [1, 0, 1]},

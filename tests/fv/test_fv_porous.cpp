@@ -25,8 +25,9 @@ TEST(FvPorous, DarcyBrinkmanPressureDrop) {
   const double h = H / N;
   const std::string text = R"({
     "run": {"mode": "fluid"},
-    "domain": {"length": [3.0, 1.0, )" + std::to_string(3 * h) + R"(], "cells": [)" +
-                           std::to_string(nx) + ", " + std::to_string(N) + R"(, 3],
+    "domain": {"length": [3.0, 1.0, )" +
+                           std::to_string(3 * h) + R"(], "cells": [)" + std::to_string(nx) + ", " +
+                           std::to_string(N) + R"(, 3],
                "periodic": {"z": true}},
     "fluid": {"nu": 0.05, "convection": "tvd", "adaptive_dt": true, "dt": 1.0,
               "pressure": {"tol": 1e-10},

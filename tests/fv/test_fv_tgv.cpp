@@ -25,13 +25,15 @@ TgvError tgv(int n, const std::string& solver = "pfmg") {
   const double L = 2 * M_PI, h = L / n, nu = 0.02, tEnd = 1.0;
   const std::string text = R"({
     "run": {"mode": "fluid"},
-    "domain": {"length": [)" + std::to_string(L) + ", " + std::to_string(L) + ", " +
+    "domain": {"length": [)" +
+                           std::to_string(L) + ", " + std::to_string(L) + ", " +
                            std::to_string(3 * h) + R"(], "cells": [)" + std::to_string(n) + ", " +
                            std::to_string(n) + R"(, 3],
                "periodic": {"x": true, "y": true, "z": true}},
     "partition": {"dims": [0, 0, 1]},
     "fluid": {"nu": 0.02, "convection": "central", "adaptive_dt": true, "dt": 1.0, "cfl": 0.4,
-              "pressure": {"tol": 1e-10, "solver": ")" + solver + R"("}}
+              "pressure": {"tol": 1e-10, "solver": ")" +
+                           solver + R"("}}
   })";
   const Config cfg = fvtest::config(text);
   const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
@@ -39,9 +41,9 @@ TgvError tgv(int n, const std::string& solver = "pfmg") {
   fv::FluidSolver s(dec, cfg, timers);
   auto exact = [&](int c, const Real3& x, double t) {
     const double d = std::exp(-2 * nu * t);
-    return c == 0 ? std::sin(x[0]) * std::cos(x[1]) * d
-         : c == 1 ? -std::cos(x[0]) * std::sin(x[1]) * d
-                  : 0.0;
+    return c == 0   ? std::sin(x[0]) * std::cos(x[1]) * d
+           : c == 1 ? -std::cos(x[0]) * std::sin(x[1]) * d
+                    : 0.0;
   };
   auto& f = s.fields();
   for (int c = 0; c < 3; ++c)
@@ -52,7 +54,8 @@ TgvError tgv(int n, const std::string& solver = "pfmg") {
     double e = 0;
     const auto& u = std::as_const(s).fields().u;
     for (int c = 0; c < 3; ++c)
-      forEach(fvtest::ownedFaces(dec, c), [&](int i, int j, int k) { e += u[c](i, j, k) * u[c](i, j, k); });
+      forEach(fvtest::ownedFaces(dec, c),
+              [&](int i, int j, int k) { e += u[c](i, j, k) * u[c](i, j, k); });
     return dec.comm().sum(e);
   };
   const double ke0 = kinetic();
@@ -67,7 +70,8 @@ TgvError tgv(int n, const std::string& solver = "pfmg") {
       r2 += ue * ue;
     });
   const double decay = std::exp(-4 * nu * s.time());
-  return {std::fabs(ke / ke0 - decay) / (1 - decay), std::sqrt(dec.comm().sum(e2) / dec.comm().sum(r2)),
+  return {std::fabs(ke / ke0 - decay) / (1 - decay),
+          std::sqrt(dec.comm().sum(e2) / dec.comm().sum(r2)),
           s.diagnostics()["pressure"]["iterations_max"].get<int>()};
 }
 

@@ -48,7 +48,9 @@ class ScratchDir : public testing::Environment {
 [[maybe_unused]] testing::Environment* const kScratch =
     testing::AddGlobalTestEnvironment(new ScratchDir);
 
-std::string scratch(const std::string& name) { return (fs::path(ScratchDir::path()) / name).string(); }
+std::string scratch(const std::string& name) {
+  return (fs::path(ScratchDir::path()) / name).string();
+}
 
 GlobalGrid grid(std::array<bool, 3> periodic = {false, false, false}) {
   GlobalGrid g;
@@ -60,7 +62,9 @@ GlobalGrid grid(std::array<bool, 3> periodic = {false, false, false}) {
 }
 
 /// A value per global index, distinct everywhere, exactly representable.
-double code(Int3 gi, int comp = 0) { return 1.0 + gi[0] + 100.0 * gi[1] + 10000.0 * gi[2] + 0.25 * comp; }
+double code(Int3 gi, int comp = 0) {
+  return 1.0 + gi[0] + 100.0 * gi[1] + 10000.0 * gi[2] + 0.25 * comp;
+}
 
 /// Uneven cuts along every axis that has more than one block (a different split from uniform).
 Decomposition unevenDecomposition(const Comm& comm, const GlobalGrid& g) {
@@ -92,8 +96,8 @@ int countCellMismatches(const Decomposition& dec, const CellField& f, int comp =
     const double expect =
         owned ? code({dec.lo()[0] + i, dec.lo()[1] + j, dec.lo()[2] + k}, comp) : kSentinel;
     if (f(i, j, k) != expect && bad++ < 3)
-      ADD_FAILURE() << "cell (" << i << "," << j << "," << k << ") on rank " << dec.rank()
-                    << ": " << f(i, j, k) << " expected " << expect;
+      ADD_FAILURE() << "cell (" << i << "," << j << "," << k << ") on rank " << dec.rank() << ": "
+                    << f(i, j, k) << " expected " << expect;
   });
   return bad;
 }
@@ -112,8 +116,12 @@ long long particleCount(int r, int size) {
   if (size > 1 && r == 1) return 0;  // a rank without particles
   return 3 + (5 * r) % 4;
 }
-std::int64_t particleId(int r, long long i) { return (std::int64_t{1} << 40) + 1000 * r + i; }
-double particleValue(int r, long long i, int c) { return 0.5 * r + 0.001 * static_cast<double>(i) + 10.0 * c; }
+std::int64_t particleId(int r, long long i) {
+  return (std::int64_t{1} << 40) + 1000 * r + i;
+}
+double particleValue(int r, long long i, int c) {
+  return 0.5 * r + 0.001 * static_cast<double>(i) + 10.0 * c;
+}
 
 /// (rank, index) of every global row, in rank order: what the file must hold.
 std::vector<std::pair<int, long long>> globalRows(int size) {
@@ -134,7 +142,8 @@ void writeParticles(H5File& f, const Comm& comm) {
     const auto u = static_cast<std::size_t>(i);
     scal[u] = particleValue(comm.rank(), i, 0);
     ids[u] = particleId(comm.rank(), i);
-    for (int c = 0; c < 3; ++c) vec[static_cast<std::size_t>(c)][u] = particleValue(comm.rank(), i, c);
+    for (int c = 0; c < 3; ++c)
+      vec[static_cast<std::size_t>(c)][u] = particleValue(comm.rank(), i, c);
   }
   writeParticleArray(f, "/part/radius", scal);
   writeParticleArray(f, "/part/id", ids);
@@ -157,7 +166,8 @@ void checkParticles(H5File& f, const RowRange& rows, int writerSize) {
     EXPECT_EQ(scal[u], particleValue(r, i, 0));
     EXPECT_EQ(ids[u], particleId(r, i));
     EXPECT_EQ(ranks[u], r);
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(vec[static_cast<std::size_t>(c)][u], particleValue(r, i, c));
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(vec[static_cast<std::size_t>(c)][u], particleValue(r, i, c));
   }
 }
 
@@ -172,7 +182,8 @@ TEST(H5Io, CellFieldRoundTripOnUnevenBlocks) {
     H5File f = H5File::create(dec.comm(), path);
     EXPECT_FALSE(fs::exists(path)) << "the file appears only at close()";
     writeCellField(f, "/a/b/p", dec, filledCell(dec, 1));
-    writeCellVector(f, "/u", dec, filledCell(dec, 2, 0), filledCell(dec, 2, 1), filledCell(dec, 2, 2));
+    writeCellVector(f, "/u", dec, filledCell(dec, 2, 0), filledCell(dec, 2, 1),
+                    filledCell(dec, 2, 2));
     f.close();
   }
   EXPECT_TRUE(fs::exists(path));
@@ -191,7 +202,8 @@ TEST(H5Io, CellFieldRoundTripOnUnevenBlocks) {
   std::array<CellField, 3> u;
   for (auto& c : u) c = CellField(cellLayout(uni, 1), kSentinel);
   readCellVector(f, "/u", uni, u[0], u[1], u[2]);
-  for (int c = 0; c < 3; ++c) EXPECT_EQ(countCellMismatches(uni, u[static_cast<std::size_t>(c)], c), 0);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_EQ(countCellMismatches(uni, u[static_cast<std::size_t>(c)], c), 0);
 }
 
 TEST(H5Io, FaceComponentsOnClosedAndPeriodicAxes) {
@@ -244,7 +256,7 @@ TEST(H5Io, ParticleArraysWithUnevenAndEmptyRanks) {
   EXPECT_EQ(f.shape("/part/id"), (std::vector<long long>{total}));
   const RowRange mine = rowsOf(w, particleCount(w.rank(), w.size()));
   EXPECT_EQ(mine.total, total);
-  checkParticles(f, mine, w.size());            // each rank its own rows back
+  checkParticles(f, mine, w.size());                // each rank its own rows back
   checkParticles(f, evenRows(w, total), w.size());  // an even split (restart)
 }
 
@@ -360,7 +372,8 @@ TEST(H5Io, ErrorsReachEveryRankWithoutHangs) {
     writeCellField(f, "/p", dec, filledCell(dec, 1));
     EXPECT_THROW(writeCellField(f, "/p", dec, filledCell(dec, 1)), Error);  // exists
     // a layout mismatch on rank 0 only: every rank throws, and the file stays usable
-    CellField bad = w.isRoot() ? CellField(FieldLayout{{1, 1, 1}, 1, {0, 0, 0}}) : filledCell(dec, 1);
+    CellField bad =
+        w.isRoot() ? CellField(FieldLayout{{1, 1, 1}, 1, {0, 0, 0}}) : filledCell(dec, 1);
     EXPECT_THROW(writeCellField(f, "/q", dec, bad), Error);
     const std::vector<double> longer(3), shorter(2);
     EXPECT_THROW(writeParticleVec3(f, "/x", Vec3Span{longer, shorter, longer}), Error);
@@ -379,7 +392,8 @@ TEST(H5Io, ErrorsReachEveryRankWithoutHangs) {
     readCellField(f, "/p", decOther, q);
     ADD_FAILURE() << "read a [5][6][11] dataset into a 12x6x5 grid";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("shape [5, 6, 11], expected [5, 6, 12]"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("shape [5, 6, 11], expected [5, 6, 12]"),
+              std::string::npos)
         << e.what();
   }
   EXPECT_THROW(writeCellField(f, "/new", dec, p), Error);  // read-only
@@ -411,7 +425,13 @@ TEST(H5Io, AbandonedFileLeavesThePreviousOneIntact) {
 TEST(H5Io, XdmfIndex) {
   const auto g = grid();
   auto s = XdmfSeries::cells("fields", g);
-  for (long long step : {0, 10, 20}) s.add({0.1 * static_cast<double>(step), step, "f_" + std::to_string(step) + ".h5", 0, "", {{"p", false, "/p"}, {"u", true, "/u"}}});
+  for (long long step : {0, 10, 20})
+    s.add({0.1 * static_cast<double>(step),
+           step,
+           "f_" + std::to_string(step) + ".h5",
+           0,
+           "",
+           {{"p", false, "/p"}, {"u", true, "/u"}}});
   s.add({1.0, 10, "again.h5", 0, "", {}});  // a restart from step 10 replaces 10 and 20
   ASSERT_EQ(s.steps().size(), 2u);
   EXPECT_EQ(s.steps()[1].file, "again.h5");
@@ -425,7 +445,9 @@ TEST(H5Io, XdmfIndex) {
   pts.add({0.5, 3, "p.h5", 17, "/x", {{"id", false, "/id", "Int", 8}}});
   const std::string y = pts.xml();
   EXPECT_NE(y.find("TopologyType=\"Polyvertex\" NumberOfElements=\"17\""), std::string::npos);
-  EXPECT_NE(y.find("Dimensions=\"17 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">p.h5:/x"), std::string::npos);
+  EXPECT_NE(
+      y.find("Dimensions=\"17 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">p.h5:/x"),
+      std::string::npos);
   EXPECT_NE(y.find("NumberType=\"Int\" Precision=\"8\""), std::string::npos);
 }
 
@@ -442,7 +464,8 @@ TEST(H5Io, OutputWriterSeries) {
   EXPECT_EQ(OutputWriter::fileName("fields", 42), "fields_000042.h5");
   EXPECT_EQ(OutputWriter::fileName("fields", 12345678), "fields_12345678.h5");
   const auto p = filledCell(dec, 1);
-  const std::array<CellField, 3> u{filledCell(dec, 1, 0), filledCell(dec, 1, 1), filledCell(dec, 1, 2)};
+  const std::array<CellField, 3> u{filledCell(dec, 1, 0), filledCell(dec, 1, 1),
+                                   filledCell(dec, 1, 2)};
   const long long n = particleCount(w.rank(), w.size());
   std::vector<std::int64_t> ids(static_cast<std::size_t>(n), 7);
   std::array<std::vector<double>, 3> x;
@@ -455,9 +478,11 @@ TEST(H5Io, OutputWriterSeries) {
     out.writeParticles(step, 0.01 * static_cast<double>(step), ids, firstRows(x, ids.size()),
                        firstRows(x, ids.size()), firstRows(x, ids.size()), r);
   }
-  EXPECT_THROW(out.writeFields(6, 0.0, {OutputField::scalar("p", p), OutputField::scalar("p", p)}), Error);
+  EXPECT_THROW(out.writeFields(6, 0.0, {OutputField::scalar("p", p), OutputField::scalar("p", p)}),
+               Error);
   EXPECT_EQ(out.fieldSeries().steps().size(), 2u);
-  EXPECT_EQ(out.particleSeries().steps().back().count, static_cast<long long>(globalRows(w.size()).size()));
+  EXPECT_EQ(out.particleSeries().steps().back().count,
+            static_cast<long long>(globalRows(w.size()).size()));
   w.barrier();
   for (const char* f : {"fields.xmf", "particles.xmf", "fields_000005.h5", "particles_000000.h5"})
     EXPECT_TRUE(fs::exists(fs::path(opt.dir) / f)) << f;

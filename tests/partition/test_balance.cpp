@@ -52,7 +52,8 @@ TEST(Balance, ClusteredBedIsBalancedWithinFifteenPercent) {
     for (int d = 0; d < 3; ++d) {
       ASSERT_EQ(bal.cuts[d].front(), 0);
       ASSERT_EQ(bal.cuts[d].back(), g.cells[d]);
-      for (std::size_t i = 1; i < bal.cuts[d].size(); ++i) ASSERT_GE(bal.cuts[d][i] - bal.cuts[d][i - 1], 2);
+      for (std::size_t i = 1; i < bal.cuts[d].size(); ++i)
+        ASSERT_GE(bal.cuts[d][i] - bal.cuts[d][i - 1], 2);
     }
   }
 }
@@ -69,7 +70,8 @@ TEST(Balance, CellCostsCountParticlesOnEveryRank) {
   GlobalGrid g = box();
   const auto dec = Decomposition::uniform(Comm::world(), g);
   // Rank r contributes r+1 particles in cell (1,1,1).
-  std::vector<double> x(static_cast<std::size_t>(dec.rank() + 1), 0.015), y(x.size(), 0.015), z(x.size(), 0.015);
+  std::vector<double> x(static_cast<std::size_t>(dec.rank() + 1), 0.015), y(x.size(), 0.015),
+      z(x.size(), 0.015);
   const auto c = cellCosts(dec, x, y, z, {0.5, 2.0});
   const int n = dec.size();
   EXPECT_DOUBLE_EQ(c[static_cast<std::size_t>(1 + 48 * (1 + 4 * 1))], 0.5 + 2.0 * n * (n + 1) / 2);

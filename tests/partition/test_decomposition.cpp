@@ -31,7 +31,8 @@ TEST(Decomposition, EvenCutsDifferByAtMostOne) {
     for (int p = 1; p <= n && p <= 9; ++p) {
       const auto cuts = Decomposition::evenCuts(n, p);
       int mn = n, mx = 0;
-      for (int i = 0; i < p; ++i) mn = std::min(mn, cuts[i + 1] - cuts[i]), mx = std::max(mx, cuts[i + 1] - cuts[i]);
+      for (int i = 0; i < p; ++i)
+        mn = std::min(mn, cuts[i + 1] - cuts[i]), mx = std::max(mx, cuts[i + 1] - cuts[i]);
       EXPECT_LE(mx - mn, 1);
       EXPECT_GE(mn, 1);
     }
@@ -45,7 +46,8 @@ TEST_P(DecompositionTest, BlocksTileTheBoxExactlyOnce) {
   std::vector<int> owners(static_cast<std::size_t>(g.cellCount()), 0);
   for (int k = dec.lo()[2]; k < dec.hi()[2]; ++k)
     for (int j = dec.lo()[1]; j < dec.hi()[1]; ++j)
-      for (int i = dec.lo()[0]; i < dec.hi()[0]; ++i) owners[static_cast<std::size_t>(i + 13 * (j + 7 * k))] += 1;
+      for (int i = dec.lo()[0]; i < dec.hi()[0]; ++i)
+        owners[static_cast<std::size_t>(i + 13 * (j + 7 * k))] += 1;
   dec.comm().sumInPlace(std::span<int>(owners));
   for (int v : owners) ASSERT_EQ(v, 1);
   for (int k = 0; k < 5; ++k)
@@ -95,7 +97,8 @@ TEST_P(DecompositionTest, OwnerOfPointsAndFaces) {
   for (int k = 0; k < 5; ++k)
     for (int j = 0; j < 7; ++j)
       for (int i = 0; i < 13; ++i) {
-        const Real3 x{g.origin[0] + (i + 0.5) * g.spacing(0), g.origin[1] + (j + 0.5) * g.spacing(1),
+        const Real3 x{g.origin[0] + (i + 0.5) * g.spacing(0),
+                      g.origin[1] + (j + 0.5) * g.spacing(1),
                       g.origin[2] + (k + 0.5) * g.spacing(2)};
         ASSERT_EQ(dec.ownerOfPoint(x), dec.ownerOfCell({i, j, k}));
       }
@@ -109,7 +112,8 @@ TEST_P(DecompositionTest, OwnerOfPointsAndFaces) {
     EXPECT_EQ(dec.ownerOfPoint({g.origin[0] - 1e-9, 1.01, 2.01}), dec.ownerOfCell({12, 0, 0}));
   }
   // Faces: face f belongs to cell f's owner; the last face of a closed axis to the last block.
-  EXPECT_EQ(dec.ownerOfFace(0, {13, 3, 2}), g.periodic[0] ? dec.ownerOfCell({0, 3, 2}) : dec.ownerOfCell({12, 3, 2}));
+  EXPECT_EQ(dec.ownerOfFace(0, {13, 3, 2}),
+            g.periodic[0] ? dec.ownerOfCell({0, 3, 2}) : dec.ownerOfCell({12, 3, 2}));
   EXPECT_EQ(dec.ownerOfFace(1, {4, 0, 2}), dec.ownerOfCell({4, 0, 2}));
 }
 
@@ -124,7 +128,8 @@ TEST(Decomposition, FixedAxesAndErrors) {
   EXPECT_EQ(dec.dims()[0], comm.size());
   if (comm.size() > 1) {
     EXPECT_THROW(Decomposition::uniform(comm, grid({1, 1, 1})), ConfigError);
-    EXPECT_THROW(Decomposition::uniform(comm, grid({13, 7, 5}), {comm.size() + 1, 1, 1}), ConfigError);
+    EXPECT_THROW(Decomposition::uniform(comm, grid({13, 7, 5}), {comm.size() + 1, 1, 1}),
+                 ConfigError);
   }
 }
 

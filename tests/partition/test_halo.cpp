@@ -27,7 +27,8 @@ GlobalGrid makeGrid(const Param& p) {
 }
 
 /// Global index along d of local index i, with periodic wrap; -1 when outside a closed box.
-/// `faces`: the axis is staggered (valid face indices 0..N on a closed axis, wrap mod N if periodic).
+/// `faces`: the axis is staggered (valid face indices 0..N on a closed axis, wrap mod N if
+/// periodic).
 int globalAlong(const GlobalGrid& g, int d, int lo, int i, bool faces) {
   const int n = g.cells[d];
   int x = lo + i;
@@ -139,7 +140,8 @@ TEST_P(HaloTest, CellGatherMatchesGlobalIndices) {
 
 TEST_P(HaloTest, FaceGatherMatchesGlobalIndices) {
   const auto dec = Decomposition::uniform(Comm::world(), makeGrid(GetParam()));
-  for (int d = 0; d < 3; ++d) checkGather(dec, faceLayout(dec, d, GetParam().ghost), faceOwned(dec, d));
+  for (int d = 0; d < 3; ++d)
+    checkGather(dec, faceLayout(dec, d, GetParam().ghost), faceOwned(dec, d));
 }
 
 TEST_P(HaloTest, CellScatterSumAddsEveryCopyToItsOwner) {
@@ -155,11 +157,12 @@ TEST_P(HaloTest, FaceScatterSumAddsEveryCopyToItsOwner) {
     checkScatterSum(dec, faceLayout(dec, d, GetParam().ghost), faceOwned(dec, d), Fold::Keep);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Layouts, HaloTest,
-    ::testing::Values(Param{{false, false, false}, 1}, Param{{true, false, false}, 1},
-                      Param{{true, true, true}, 1}, Param{{false, true, false}, 2},
-                      Param{{true, true, true}, 2}));
+INSTANTIATE_TEST_SUITE_P(Layouts, HaloTest,
+                         ::testing::Values(Param{{false, false, false}, 1},
+                                           Param{{true, false, false}, 1},
+                                           Param{{true, true, true}, 1},
+                                           Param{{false, true, false}, 2},
+                                           Param{{true, true, true}, 2}));
 
 TEST(Halo, ScatterSumConservesAnArbitraryDeposit) {
   // Irregular values (not all ones): the sum over owned cells after the reverse halo sum equals

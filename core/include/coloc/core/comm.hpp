@@ -28,23 +28,41 @@ class MpiSession {
 template <class T>
 MPI_Datatype mpiType();
 template <>
-inline MPI_Datatype mpiType<double>() { return MPI_DOUBLE; }
+inline MPI_Datatype mpiType<double>() {
+  return MPI_DOUBLE;
+}
 template <>
-inline MPI_Datatype mpiType<float>() { return MPI_FLOAT; }
+inline MPI_Datatype mpiType<float>() {
+  return MPI_FLOAT;
+}
 template <>
-inline MPI_Datatype mpiType<int>() { return MPI_INT; }
+inline MPI_Datatype mpiType<int>() {
+  return MPI_INT;
+}
 template <>
-inline MPI_Datatype mpiType<long long>() { return MPI_LONG_LONG; }
+inline MPI_Datatype mpiType<long long>() {
+  return MPI_LONG_LONG;
+}
 template <>
-inline MPI_Datatype mpiType<unsigned long long>() { return MPI_UNSIGNED_LONG_LONG; }
+inline MPI_Datatype mpiType<unsigned long long>() {
+  return MPI_UNSIGNED_LONG_LONG;
+}
 template <>
-inline MPI_Datatype mpiType<long>() { return MPI_LONG; }
+inline MPI_Datatype mpiType<long>() {
+  return MPI_LONG;
+}
 template <>
-inline MPI_Datatype mpiType<unsigned long>() { return MPI_UNSIGNED_LONG; }
+inline MPI_Datatype mpiType<unsigned long>() {
+  return MPI_UNSIGNED_LONG;
+}
 template <>
-inline MPI_Datatype mpiType<char>() { return MPI_CHAR; }
+inline MPI_Datatype mpiType<char>() {
+  return MPI_CHAR;
+}
 template <>
-inline MPI_Datatype mpiType<std::uint8_t>() { return MPI_UINT8_T; }
+inline MPI_Datatype mpiType<std::uint8_t>() {
+  return MPI_UINT8_T;
+}
 
 struct MinMaxAvg {
   double min = 0, max = 0, avg = 0, sum = 0;
@@ -65,11 +83,17 @@ class Comm {
   double wtime() const { return MPI_Wtime(); }
 
   template <class T>
-  T sum(T v) const { return allreduce(v, MPI_SUM); }
+  T sum(T v) const {
+    return allreduce(v, MPI_SUM);
+  }
   template <class T>
-  T max(T v) const { return allreduce(v, MPI_MAX); }
+  T max(T v) const {
+    return allreduce(v, MPI_MAX);
+  }
   template <class T>
-  T min(T v) const { return allreduce(v, MPI_MIN); }
+  T min(T v) const {
+    return allreduce(v, MPI_MIN);
+  }
   template <class T>
   void sumInPlace(std::span<T> v) const {
     MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), mpiType<T>(), MPI_SUM, comm_);
@@ -86,7 +110,8 @@ class Comm {
     return out;
   }
 
-  /// Broadcast a string from `root` (used for the case file text: one reader, same text everywhere).
+  /// Broadcast a string from `root` (used for the case file text: one reader, same text
+  /// everywhere).
   std::string broadcast(std::string s, int root = 0) const;
   template <class T>
   void broadcast(std::span<T> v, int root = 0) const {

@@ -33,8 +33,12 @@ struct Range {
   bool loOpen = false, hiOpen = false;
   static Range any() { return {}; }
   static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
-  static Range nonNegative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
-  static Range atLeast(double v) { return {v, std::numeric_limits<double>::infinity(), false, false}; }
+  static Range nonNegative() {
+    return {0.0, std::numeric_limits<double>::infinity(), false, false};
+  }
+  static Range atLeast(double v) {
+    return {v, std::numeric_limits<double>::infinity(), false, false};
+  }
   static Range between(double a, double b) { return {a, b, false, false}; }
   static Range openClosed(double a, double b) { return {a, b, true, false}; }
   bool contains(double v) const;
@@ -49,11 +53,11 @@ class Schema;
 /// item's "type" field (or a single item schema under the name "").
 struct KeySpec {
   KeyKind kind = KeyKind::Number;
-  Json defaultValue;          // null: required
-  Range range;                // numbers, integers, and each component of vectors
+  Json defaultValue;                 // null: required
+  Range range;                       // numbers, integers, and each component of vectors
   std::vector<std::string> choices;  // strings: allowed values (empty: any)
   std::string help;
-  std::shared_ptr<Schema> object;                       // Object
+  std::shared_ptr<Schema> object;                        // Object
   std::map<std::string, std::shared_ptr<Schema>> items;  // List (by "type", or "" for any)
 };
 
@@ -96,7 +100,8 @@ class Schema {
 class Config {
  public:
   Config() = default;
-  Config(Json resolved, std::string source) : json_(std::move(resolved)), source_(std::move(source)) {}
+  Config(Json resolved, std::string source)
+      : json_(std::move(resolved)), source_(std::move(source)) {}
 
   /// Read `path` on rank 0, broadcast, strip comments, apply `overrides` (each "a.b.c=value",
   /// value parsed as JSON, else taken as a string), validate. Throws ConfigError on every rank.

@@ -18,13 +18,13 @@ enum class Category : std::uint8_t { Setup, Fluid, Particles, Coupling, InterPhy
 enum class Phase : std::uint8_t {
   Setup,
   // fv: one fluid step
-  FluidMomentum,         // convection, diffusion, body force, drag: the predictor u*
-  FluidBoundary,         // boundary conditions on the fields
-  FluidHalo,             // intra-physics halo exchanges of the fluid
-  FluidPressureAssemble, // matrix and right-hand side of the pressure equation
-  FluidPressureSolve,    // hypre PCG+PFMG
-  FluidProject,          // velocity correction
-  FluidCellFields,       // cell-centred velocity and pressure gradient the coupling samples
+  FluidMomentum,          // convection, diffusion, body force, drag: the predictor u*
+  FluidBoundary,          // boundary conditions on the fields
+  FluidHalo,              // intra-physics halo exchanges of the fluid
+  FluidPressureAssemble,  // matrix and right-hand side of the pressure equation
+  FluidPressureSolve,     // hypre PCG+PFMG
+  FluidProject,           // velocity correction
+  FluidCellFields,        // cell-centred velocity and pressure gradient the coupling samples
   // dem: one sub-step
   DemNeighbor,   // binning, sorting, Verlet lists
   DemForce,      // contact and wall forces

@@ -33,8 +33,8 @@ class Stencils {
   /// Returns the index of the first particle whose stencil reaches beyond the first ghost layer
   /// (or -1); such a particle is clamped, and the caller raises the error.
   long long compute(KernelKind kind, const Decomposition& dec, const FieldLayout& layout,
-                    std::span<const double> x, std::span<const double> y,
-                    std::span<const double> z, std::size_t n);
+                    std::span<const double> x, std::span<const double> y, std::span<const double> z,
+                    std::size_t n);
   int width() const { return width_; }
   std::size_t count() const { return n_; }
   /// Linear indices into Field3::data() (32-bit: a block holds < 2^31 cells) and weights of p.

@@ -8,8 +8,8 @@
 //   sampleFluidForDrag()         eps^n, u^n, grad p^n at the particles       (coupling)
 //   evaluateDrag()               beta_i from the drag law                    (coupling)
 //   depositParticles()           V_p, beta, beta v_p -> cells                (coupling)
-//   sumDepositsAcrossBlocks()    reverse halo sum over block faces           (inter-physics, remote)
-//   updateFluidCoefficients()    eps^{n+1} = clip(1 - solid), K, K u_p       (coupling)
+//   sumDepositsAcrossBlocks()    reverse halo sum over block faces           (inter-physics,
+//   remote) updateFluidCoefficients()    eps^{n+1} = clip(1 - solid), K, K u_p       (coupling)
 //   advanceFluid()               fv::FluidSolver::step                      (fluid)
 //   refreshCellVelocity()        cell-centred u^{n+1} (and grad p^{n+1})    (fluid)
 //   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (coupling)
@@ -72,9 +72,9 @@ struct Layouts {
   Decomposition fluid;
   std::optional<Decomposition> particles;  // set only in independent mode
   std::string strategy = "uniform";
-  CostModel model;                         // balanced: the weights used
-  double modelledImbalance = 1.0;          // balanced: max/avg modelled block cost
-  double uniformImbalance = 1.0;           // balanced: the same for the uniform blocks
+  CostModel model;                 // balanced: the weights used
+  double modelledImbalance = 1.0;  // balanced: max/avg modelled block cost
+  double uniformImbalance = 1.0;   // balanced: the same for the uniform blocks
 };
 
 class Simulation {

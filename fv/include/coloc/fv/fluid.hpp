@@ -29,11 +29,11 @@ namespace coloc::fv {
 void declareConfig(Schema& s);
 
 struct FluidFields {
-  FaceField u;                  // face-normal velocity components (m/s)
-  CellField p;                  // kinematic pressure p/rho_f (m^2/s^2)
-  CellField eps, epsOld;        // fluid volume fraction at n+1 and n
-  CellField K;                  // drag coefficient sum beta/(rho_f V) (1/s)
-  std::array<CellField, 3> KUp; // K * mean particle velocity (m/s^2)
+  FaceField u;                   // face-normal velocity components (m/s)
+  CellField p;                   // kinematic pressure p/rho_f (m^2/s^2)
+  CellField eps, epsOld;         // fluid volume fraction at n+1 and n
+  CellField K;                   // drag coefficient sum beta/(rho_f V) (1/s)
+  std::array<CellField, 3> KUp;  // K * mean particle velocity (m/s^2)
 };
 
 class FluidSolver {

@@ -41,9 +41,9 @@ inline void forEach(const IndexBox& b, F&& f) {
 
 /// Memory layout of a field on one block: owned extent, ghost width, staggering.
 struct FieldLayout {
-  Int3 n{1, 1, 1};       // owned cells of the block
-  int ghost = 1;         // ghost layers on every side
-  Int3 stagger{0, 0, 0}; // 1 along the axis of a face component
+  Int3 n{1, 1, 1};        // owned cells of the block
+  int ghost = 1;          // ghost layers on every side
+  Int3 stagger{0, 0, 0};  // 1 along the axis of a face component
   Int3 extent() const {
     return {n[0] + 2 * ghost + stagger[0], n[1] + 2 * ghost + stagger[1],
             n[2] + 2 * ghost + stagger[2]};

@@ -102,8 +102,8 @@ void readCellField(H5File& file, const std::string& path, const Decomposition& d
 /// Three cell fields -> one dataset [nz][ny][nx][3] (what ParaView takes as a vector).
 void writeCellVector(H5File& file, const std::string& path, const Decomposition& dec,
                      const CellField& x, const CellField& y, const CellField& z);
-void readCellVector(H5File& file, const std::string& path, const Decomposition& dec,
-                    CellField& x, CellField& y, CellField& z);
+void readCellVector(H5File& file, const std::string& path, const Decomposition& dec, CellField& x,
+                    CellField& y, CellField& z);
 /// Face component d (layout faceLayout(dec, d, g)): the owned faces (faceOwned) -> global
 /// dataset with N_d + 1 faces along d on a closed axis, N_d on a periodic one.
 void writeFaceComponent(H5File& file, const std::string& path, const Decomposition& dec, int d,
@@ -143,18 +143,18 @@ std::array<std::vector<double>, 3> readParticleVec3(H5File& file, const std::str
 
 struct XdmfAttribute {
   std::string name;
-  bool vector = false;           // 3 components (last dataset axis)
-  std::string dataset;           // path inside the step's file, e.g. "/p"
+  bool vector = false;               // 3 components (last dataset axis)
+  std::string dataset;               // path inside the step's file, e.g. "/p"
   std::string numberType = "Float";  // Float | Int
-  int precision = 8;             // bytes
+  int precision = 8;                 // bytes
 };
 
 struct XdmfStep {
   double time = 0;
   long long step = 0;
-  std::string file;       // HDF5 file, relative to the .xmf
-  long long count = 0;    // particles of this step (particle series)
-  std::string geometry;   // dataset of the [N][3] positions (particle series)
+  std::string file;      // HDF5 file, relative to the .xmf
+  long long count = 0;   // particles of this step (particle series)
+  std::string geometry;  // dataset of the [N][3] positions (particle series)
   std::vector<XdmfAttribute> attributes;
 };
 
