@@ -33,9 +33,28 @@ struct ParticleStore {
   std::size_t size() const { return nOwned + nGhost; }
 };
 
+/// One pair's tangential (and, where the model keeps one, rolling) history, keyed by global ids.
+/// `holder` is the particle that carries the record (it migrates with that particle).
+struct ContactHistory {
+  std::int64_t holder = 0, partner = 0;
+  std::array<double, 3> shear{}, roll{};
+};
+
+/// The complete restartable state of one rank's owned particles (checkpoint/restart and
+/// re-balancing). particles holds owned particles only (nGhost = 0), with f, torque and fExt.
+struct DemState {
+  ParticleStore particles;
+  std::vector<ContactHistory> contacts;  // every history held by an owned particle
+  double time = 0;
+  long long steps = 0, rebuilds = 0;
+};
+
 class DemSolver {
  public:
   DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers);
+  /// Restart / re-balance: the particles and histories of `initial` instead of generating them
+  /// from the case (each rank may pass any subset; particles are sent to their owners). Collective.
+  DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers, DemState initial);
   ~DemSolver();
   DemSolver(const DemSolver&) = delete;
   DemSolver& operator=(const DemSolver&) = delete;
@@ -52,6 +71,9 @@ class DemSolver {
   Json diagnostics() const;
 
   // Additions beyond the coupling contract (tests, benchmarks, reports).
+  /// A canonical snapshot: forces a rebuild first (migration, bin sort, lists), so that the run
+  /// that wrote it and a run restored from it continue bitwise identically. Collective.
+  DemState saveState();
   /// Forces a neighbour rebuild now: migration, re-sort by bin, ghosts, Verlet lists. Collective.
   void rebuildNow();
   /// Recomputes the forces at the current state without advancing the contact history.
