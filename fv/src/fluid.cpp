@@ -64,6 +64,7 @@ struct FluidSolver::Impl {
   double maxRate = 0;  // max over cells of sum_d |u_d|/h_d (1/s), after the last step
   double cflLast = 0, dtLast = 0, steadyResidual = std::numeric_limits<double>::infinity();
   double scale2 = 0, rhsScaleLast = 0;
+  long long setupsOffset = 0;  // pressure-matrix setups before a restore
   double inLocal = 0, outLocal = 0, dVolLocal = 0;  // last step, this rank
   Real3 dragLocal{0, 0, 0};
 
@@ -585,6 +586,71 @@ double FluidSolver::nextDt() const {
   return std::min(m.dtFixed, 1.0 / (m.maxRate / m.cfl + visc));
 }
 
+FluidCounters FluidSolver::counters() const {
+  const auto& m = *impl_;
+  FluidCounters c;
+  c.time = m.time;
+  c.dtOld = m.dtOld;
+  c.dtLast = m.dtLast;
+  c.cflLast = m.cflLast;
+  c.maxRate = m.maxRate;
+  c.steadyResidual = m.steadyResidual;
+  c.resLast = m.resLast;
+  c.rhsScaleLast = m.rhsScaleLast;
+  c.steps = m.steps;
+  c.itSum = m.itSum;
+  c.solves = m.solves;
+  c.setups = m.ps->setups() + m.setupsOffset;
+  c.itMax = m.itMax;
+  c.itLast = m.itLast;
+  c.haveOld = m.haveOld;
+  c.ratesStale = m.ratesStale;
+  return c;
+}
+
+const std::array<Field3<double>, 3>& FluidSolver::history() const {
+  return impl_->Ho;  // step() swaps Hn and Ho at its end: Ho holds the last step's terms
+}
+std::array<Field3<double>, 3>& FluidSolver::history() {
+  return impl_->Ho;
+}
+
+void FluidSolver::restoreState(const FluidCounters& c) {
+  auto& m = *impl_;
+  auto& f = m.f;
+  // Ghosts as a step leaves them: the cell inputs gathered and closed by the boundary
+  // conditions, p gathered (its box-face ghosts are never read), u refreshed on demand.
+  {
+    Field3<double>* cells[7] = {&f.eps, &f.epsOld, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2], &f.p};
+    m.cellHalo.gather(std::span<Field3<double>* const>(cells, 7));
+  }
+  applyScalarBc(m.dec, f.eps);
+  applyScalarBc(m.dec, f.epsOld);
+  applyScalarBc(m.dec, f.K);
+  for (auto& k : f.KUp) applyScalarBc(m.dec, k);
+  m.uGhostsFresh = false;
+  m.coefficientsChanged = true;
+  m.matrixDt = -1;
+  m.time = c.time;
+  m.dtOld = c.dtOld;
+  m.dtLast = c.dtLast;
+  m.cflLast = c.cflLast;
+  m.maxRate = c.maxRate;
+  m.steadyResidual = c.steadyResidual;
+  m.resLast = c.resLast;
+  m.rhsScaleLast = c.rhsScaleLast;
+  m.steps = c.steps;
+  m.itSum = c.itSum;
+  m.solves = c.solves;
+  m.setupsOffset = c.setups - m.ps->setups();
+  m.itMax = static_cast<int>(c.itMax);
+  m.itLast = static_cast<int>(c.itLast);
+  m.haveOld = c.haveOld;
+  m.ratesStale = c.ratesStale;
+  m.inLocal = m.outLocal = m.dVolLocal = 0;
+  m.dragLocal = {0, 0, 0};
+}
+
 void FluidSolver::cellVelocity(std::array<CellField, 3>& out) {
   auto& m = *impl_;
   if (!m.uGhostsFresh) m.fillGhosts();
@@ -660,7 +726,7 @@ Json FluidSolver::diagnostics() const {
                    {"iterations_last", m.itLast},
                    {"residual_last", m.resLast},
                    {"rhs_scale_last", m.rhsScaleLast},
-                   {"setups", m.ps->setups()}};
+                   {"setups", m.ps->setups() + m.setupsOffset}};
   j["checks"] = {{"mass_balance", balance}};
   j["fluid"] = {{"steps", m.steps},
                 {"time", m.time},

@@ -17,6 +17,35 @@ void declareOutputConfig(Schema& s) {
   s.boolean("output.particles", true,
             "write the particles (DIR/particles_NNNNNN.h5, particles.xmf)");
   s.string("output.dir", "", "folder of the HDF5/XDMF output (empty: the run's --out folder)");
+  s.integer("output.checkpoint_interval", 0,
+            "write a restart checkpoint every this many steps, and at the end of the run "
+            "(0: none); coloc run CASE --restart FILE continues from one (docs/output.md)",
+            Range::nonNegative());
+  s.string("output.checkpoint_file", "checkpoint.h5",
+           "checkpoint file, relative to output.dir; each checkpoint replaces it atomically "
+           "(written as FILE.tmp, renamed when complete)");
+  s.boolean("output.checkpoint_on_failure", true,
+            "when the run fails (NaN, CFL, a particle leaving the box, ...), write the state at "
+            "the failure to FILE with .failed before .h5 (status attribute 'failed: ...'); the "
+            "last good checkpoint is kept");
+}
+
+CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::string& runOutDir) {
+  CheckpointOptions o;
+  o.intervalSteps = cfg.integer("output.checkpoint_interval");
+  o.onFailure = cfg.boolean("output.checkpoint_on_failure");
+  const std::filesystem::path file = cfg.string("output.checkpoint_file");
+  if (file.empty()) throw ConfigError("output.checkpoint_file", "empty file name");
+  const std::string dir = outputOptionsFromConfig(cfg, runOutDir).dir;
+  o.path = file.is_absolute() ? file.string() : (std::filesystem::path(dir) / file).string();
+  return o;
+}
+
+std::string failedCheckpointPath(const std::string& path) {
+  std::filesystem::path p(path);
+  const std::string ext = p.extension().string();
+  return (p.parent_path() / (p.stem().string() + ".failed" + (ext.empty() ? ".h5" : ext)))
+      .string();
 }
 
 OutputOptions outputOptionsFromConfig(const Config& cfg, const std::string& runOutDir) {

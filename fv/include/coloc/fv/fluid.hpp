@@ -28,6 +28,19 @@ namespace coloc::fv {
 /// Declares the "fluid.*" keys of the case file.
 void declareConfig(Schema& s);
 
+/// The solver's state beyond the fields and the AB2 history (checkpoint/restart, re-balancing):
+/// everything the next step, nextDt() and diagnostics() read. Same value on every rank.
+struct FluidCounters {
+  double time = 0, dtOld = 0, dtLast = 0, cflLast = 0;
+  double maxRate = 0;         // max over cells of sum_d |u_d|/h_d after the last step (1/s)
+  double steadyResidual = 0;  // +inf before the first step
+  double resLast = 0, rhsScaleLast = 0;
+  long long steps = 0, itSum = 0, solves = 0, setups = 0;
+  long long itMax = 0, itLast = 0;
+  bool haveOld = false;     // an AB2 history exists (the next step uses AB2)
+  bool ratesStale = false;  // nextDt() recomputes the velocity rate first
+};
+
 struct FluidFields {
   FaceField u;                   // face-normal velocity components (m/s)
   CellField p;                   // kinematic pressure p/rho_f (m^2/s^2)
@@ -60,6 +73,19 @@ class FluidSolver {
   /// max|u^{n+1}-u^n| / max|u^{n+1}| of the last step (same value on every rank).
   double steadyResidual() const;
   long long stepCount() const;
+
+  // ---- state (checkpoint/restart, re-balancing) --------------------------------------------
+  /// The scalar state (local, no communication).
+  FluidCounters counters() const;
+  /// The AB2 history: the explicit terms H of the last step, one array per face component d on
+  /// faceLayout(dec, d, 0) (owned faces; faces the predictor does not advance hold 0).
+  const std::array<Field3<double>, 3>& history() const;
+  std::array<Field3<double>, 3>& history();
+  /// Restore: after the owned values of fields() (u, p, eps, epsOld, K, KUp) and of history()
+  /// were overwritten (e.g. read from a checkpoint on any decomposition), refresh every ghost
+  /// layer as the step leaves them and take the counters; the next step rebuilds the pressure
+  /// matrix. With the same decomposition the run then continues bitwise identically. Collective.
+  void restoreState(const FluidCounters& c);
 
   /// Cell-centred velocity (mean of the two faces) with one ghost layer filled.
   void cellVelocity(std::array<CellField, 3>& out);

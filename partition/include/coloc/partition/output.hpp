@@ -36,10 +36,24 @@ struct OutputOptions {
   std::string dir = ".";
 };
 
-/// output.{interval_steps,fields,particles,dir}.
+/// Restart checkpoints (coupling/checkpoint.hpp writes them).
+struct CheckpointOptions {
+  long long intervalSteps = 0;  // 0: none
+  std::string path;             // the checkpoint file (output.dir / output.checkpoint_file)
+  bool onFailure = true;        // write failedCheckpointPath(path) when the run fails
+  bool due(long long step) const { return intervalSteps > 0 && step > 0 && step % intervalSteps == 0; }
+};
+
+/// output.{interval_steps,fields,particles,dir,checkpoint_interval,checkpoint_file,
+/// checkpoint_on_failure}.
 void declareOutputConfig(Schema& s);
 /// The options of a case; output.dir "" means `runOutDir` (the run's --out folder).
 OutputOptions outputOptionsFromConfig(const Config& cfg, const std::string& runOutDir);
+
+/// The checkpoint options of a case (paths resolved like outputOptionsFromConfig).
+CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::string& runOutDir);
+/// Where a failed run's state goes: "DIR/checkpoint.h5" -> "DIR/checkpoint.failed.h5".
+std::string failedCheckpointPath(const std::string& path);
 
 /// A cell field to write: a scalar (c[0]) or a 3-vector (c[0..2]).
 struct OutputField {

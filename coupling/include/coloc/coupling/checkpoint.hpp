@@ -1,0 +1,73 @@
+// coloc/coupling/checkpoint.hpp — restart checkpoints: the complete state of a Simulation in ONE
+// parallel HDF5 file (collective I/O through partition/h5io.hpp), readable on any decomposition
+// of the same grid (docs/output.md, "Checkpoints and restart").
+//
+//   /                     attributes format "coloc-checkpoint", version, status ("ok" |
+//                         "failed: <message>"), case, mode, ranks, step, time, config (JSON)
+//   /grid                 attributes origin, length, cells, periodic ([3] each)
+//   /partition            strategy, fluid_dims, fluid_cuts_{x,y,z}; particle_dims,
+//                         particle_cuts_{x,y,z} (independent mode)
+//   /simulation           the Simulation's counters (time, steps, substeps, last_dt, ...)
+//   /fluid                u_x u_y u_z (faces), p eps eps_old K (cells), KUp [nz][ny][nx][3],
+//                         H_x H_y H_z (AB2 history, faces) + the solver's counters as attributes
+//   /particles            id material x v omega f torque f_ext radius mass (rows by rank) +
+//                         time, steps, rebuilds, count
+//   /particles/contacts   holder partner shear [M][3] roll [M][3]
+//
+// Every function is collective over the communicator of the file or the decomposition.
+// Errors (missing or corrupt file, another grid, a failed checkpoint) are coloc::Error on every
+// rank, with the file name.
+#pragma once
+
+#include <string>
+
+#include "coloc/core/config.hpp"
+#include "coloc/core/run_config.hpp"
+#include "coloc/dem/dem.hpp"
+#include "coloc/fv/fluid.hpp"
+#include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/h5io.hpp"
+
+namespace coloc::coupling {
+
+inline constexpr const char* kCheckpointFormat = "coloc-checkpoint";
+inline constexpr long long kCheckpointVersion = 1;
+
+/// What a checkpoint says about itself (the same on every rank).
+struct CheckpointInfo {
+  std::string path, status, caseName, mode, strategy, config;
+  long long version = 0, steps = 0, ranks = 0;
+  double time = 0;
+  GlobalGrid grid;
+  std::array<std::vector<int>, 3> fluidCuts, particleCuts;  // particleCuts: independent mode
+  bool ok() const { return status == "ok"; }
+};
+
+/// Reads the attributes of `path` (not its arrays). Collective; coloc::Error on every rank when
+/// the file is missing, not HDF5, or not a coloc checkpoint.
+CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path);
+/// readCheckpointInfo, then checks the file can restart a run of `grid` in `mode`: status "ok",
+/// the same grid (cells, origin, length, periodicity) and run mode. Collective.
+CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const GlobalGrid& grid,
+                                RunMode mode);
+
+// ---- the pieces (Simulation::writeCheckpoint and the restoring constructor use them) --------
+
+void writeGrid(H5File& file, const GlobalGrid& grid);
+void writeCuts(H5File& file, const std::string& prefix, const Decomposition& dec);
+/// Fields (owned values), AB2 history and counters of the fluid to group `group`.
+void writeFluidState(H5File& file, const std::string& group, const Decomposition& dec,
+                     const fv::FluidSolver& fluid);
+/// The inverse on `dec` (any decomposition of the same grid): fields, history, then
+/// FluidSolver::restoreState.
+void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
+                    fv::FluidSolver& fluid);
+/// Each rank's owned particles as rows of global arrays (rank order), contacts likewise.
+void writeDemState(H5File& file, const std::string& group, const dem::DemState& s);
+/// An even share of the rows on each rank (the restoring DemSolver sends them to their owners).
+dem::DemState readDemState(H5File& file, const std::string& group);
+/// The owned particles without contact histories (when DemSolver::saveState cannot run: the
+/// state at a failure).
+dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long steps);
+
+}  // namespace coloc::coupling

@@ -1,0 +1,311 @@
+// Restart checkpoints: layout in coupling/include/coloc/coupling/checkpoint.hpp, docs/output.md.
+#include "coloc/coupling/checkpoint.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "coloc/core/error.hpp"
+
+namespace coloc::coupling {
+
+namespace {
+
+std::vector<double> asDoubles(const std::vector<int>& v) {
+  return std::vector<double>(v.begin(), v.end());
+}
+std::vector<int> asInts(const std::vector<double>& v) {
+  std::vector<int> out;
+  for (double x : v) out.push_back(static_cast<int>(std::lround(x)));
+  return out;
+}
+std::vector<double> three(const Real3& v) {
+  return {v[0], v[1], v[2]};
+}
+const char* const kAxis[3] = {"x", "y", "z"};
+
+std::string fmt(const std::array<double, 3>& v) {
+  char b[128];
+  std::snprintf(b, sizeof b, "(%.17g, %.17g, %.17g)", v[0], v[1], v[2]);
+  return b;
+}
+
+/// Rows of a [N][3] dataset as an array-of-structs.
+std::vector<std::array<double, 3>> readRows3(H5File& f, const std::string& path,
+                                             const RowRange& r) {
+  const auto soa = readParticleVec3(f, path, r);
+  std::vector<std::array<double, 3>> out(static_cast<std::size_t>(r.count));
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (int d = 0; d < 3; ++d) out[i][static_cast<std::size_t>(d)] = soa[d][i];
+  return out;
+}
+
+}  // namespace
+
+void writeGrid(H5File& file, const GlobalGrid& g) {
+  file.createGroup("/grid");
+  file.setAttribute("/grid", "origin", std::span<const double>(three(g.origin)));
+  file.setAttribute("/grid", "length", std::span<const double>(three(g.length)));
+  const std::vector<double> cells{double(g.cells[0]), double(g.cells[1]), double(g.cells[2])};
+  file.setAttribute("/grid", "cells", std::span<const double>(cells));
+  const std::vector<double> per{g.periodic[0] ? 1.0 : 0.0, g.periodic[1] ? 1.0 : 0.0,
+                                g.periodic[2] ? 1.0 : 0.0};
+  file.setAttribute("/grid", "periodic", std::span<const double>(per));
+}
+
+void writeCuts(H5File& file, const std::string& group, const Decomposition& dec) {
+  file.createGroup(group);
+  const std::vector<double> dims{double(dec.dims()[0]), double(dec.dims()[1]),
+                                 double(dec.dims()[2])};
+  file.setAttribute(group, "dims", std::span<const double>(dims));
+  for (int d = 0; d < 3; ++d)
+    file.setAttribute(group, std::string("cuts_") + kAxis[d],
+                      std::span<const double>(asDoubles(dec.cuts()[d])));
+}
+
+CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
+  CheckpointInfo info;
+  info.path = path;
+  try {
+    H5File f = H5File::openRead(comm, path);
+    std::string format;
+    // A file without the format attribute is not a checkpoint: say so rather than
+    // "no such attribute".
+    try {
+      format = f.attributeString("/", "format");
+    } catch (const Error&) {
+      format.clear();
+    }
+    if (format != kCheckpointFormat)
+      throw Error("not a coloc checkpoint (no attribute format = \"" +
+                  std::string(kCheckpointFormat) + "\")");
+    info.version = f.attributeInt("/", "version");
+    if (info.version != kCheckpointVersion)
+      throw Error("checkpoint format version " + std::to_string(info.version) +
+                  ", this coloc reads version " + std::to_string(kCheckpointVersion));
+    info.status = f.attributeString("/", "status");
+    info.caseName = f.attributeString("/", "case");
+    info.mode = f.attributeString("/", "mode");
+    info.config = f.attributeString("/", "config");
+    info.steps = f.attributeInt("/", "step");
+    info.ranks = f.attributeInt("/", "ranks");
+    info.time = f.attributeDouble("/", "time");
+    const auto o = f.attributeDoubles("/grid", "origin");
+    const auto l = f.attributeDoubles("/grid", "length");
+    const auto c = f.attributeDoubles("/grid", "cells");
+    const auto p = f.attributeDoubles("/grid", "periodic");
+    if (o.size() != 3 || l.size() != 3 || c.size() != 3 || p.size() != 3)
+      throw Error("/grid: attributes origin, length, cells, periodic must have 3 entries");
+    for (int d = 0; d < 3; ++d) {
+      info.grid.origin[d] = o[d];
+      info.grid.length[d] = l[d];
+      info.grid.cells[d] = static_cast<int>(std::lround(c[d]));
+      info.grid.periodic[d] = p[d] != 0.0;
+    }
+    info.strategy = f.attributeString("/partition", "strategy");
+    for (int d = 0; d < 3; ++d)
+      info.fluidCuts[d] =
+          asInts(f.attributeDoubles("/partition/fluid", std::string("cuts_") + kAxis[d]));
+    if (f.exists("/partition/particles"))
+      for (int d = 0; d < 3; ++d)
+        info.particleCuts[d] =
+            asInts(f.attributeDoubles("/partition/particles", std::string("cuts_") + kAxis[d]));
+    f.close();
+  } catch (const Error& e) {
+    throw Error("checkpoint '" + path + "': " + e.what());
+  }
+  return info;
+}
+
+CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const GlobalGrid& g,
+                                RunMode mode) {
+  CheckpointInfo info = readCheckpointInfo(comm, path);
+  const std::string where = "cannot restart from '" + path + "': ";
+  if (!info.ok())
+    throw Error(where + "its status is '" + info.status +
+                "' (the state at a failure, for inspection); restart from the last good "
+                "checkpoint");
+  if (info.grid.cells != g.cells)
+    throw Error(where + "its grid has " + std::to_string(info.grid.cells[0]) + "x" +
+                std::to_string(info.grid.cells[1]) + "x" + std::to_string(info.grid.cells[2]) +
+                " cells, the case " + std::to_string(g.cells[0]) + "x" +
+                std::to_string(g.cells[1]) + "x" + std::to_string(g.cells[2]) +
+                " (domain.cells)");
+  for (int d = 0; d < 3; ++d) {
+    const double tol = 1e-12 * std::max(1.0, std::fabs(g.length[d]));
+    if (std::fabs(info.grid.origin[d] - g.origin[d]) > tol ||
+        std::fabs(info.grid.length[d] - g.length[d]) > tol)
+      throw Error(where + "its box is origin " + fmt(info.grid.origin) + ", length " +
+                  fmt(info.grid.length) + "; the case's origin " + fmt(g.origin) + ", length " +
+                  fmt(g.length));
+    if (info.grid.periodic[d] != g.periodic[d])
+      throw Error(where + "its periodicity along " + kAxis[d] + " differs from the case's");
+  }
+  if (info.mode != runModeName(mode))
+    throw Error(where + "it was written in run.mode " + info.mode + ", the case runs " +
+                runModeName(mode));
+  return info;
+}
+
+// ---- fluid --------------------------------------------------------------------------------------
+
+void writeFluidState(H5File& file, const std::string& group, const Decomposition& dec,
+                     const fv::FluidSolver& fluid) {
+  const auto& f = fluid.fields();
+  file.createGroup(group);
+  for (int d = 0; d < 3; ++d) {
+    writeFaceComponent(file, group + "/u_" + kAxis[d], dec, d, f.u[d]);
+    writeFaceComponent(file, group + "/H_" + kAxis[d], dec, d, fluid.history()[d]);
+  }
+  writeCellField(file, group + "/p", dec, f.p);
+  writeCellField(file, group + "/eps", dec, f.eps);
+  writeCellField(file, group + "/eps_old", dec, f.epsOld);
+  writeCellField(file, group + "/K", dec, f.K);
+  writeCellVector(file, group + "/KUp", dec, f.KUp[0], f.KUp[1], f.KUp[2]);
+  const fv::FluidCounters c = fluid.counters();
+  const std::pair<const char*, double> dbl[] = {
+      {"time", c.time},       {"dt_old", c.dtOld},
+      {"dt_last", c.dtLast},  {"cfl_last", c.cflLast},
+      {"max_rate", c.maxRate}, {"steady_residual", c.steadyResidual},
+      {"residual_last", c.resLast}, {"rhs_scale_last", c.rhsScaleLast}};
+  for (const auto& [k, v] : dbl) file.setAttribute(group, k, v);
+  const std::pair<const char*, long long> ints[] = {
+      {"steps", c.steps},    {"iterations_sum", c.itSum}, {"solves", c.solves},
+      {"setups", c.setups},  {"iterations_max", c.itMax}, {"iterations_last", c.itLast},
+      {"have_old", c.haveOld ? 1 : 0}, {"rates_stale", c.ratesStale ? 1 : 0}};
+  for (const auto& [k, v] : ints) file.setAttribute(group, k, v);
+}
+
+void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
+                    fv::FluidSolver& fluid) {
+  // fields() (non-const) marks the solver's ghosts and rates stale; restoreState sets them.
+  auto& f = fluid.fields();
+  for (int d = 0; d < 3; ++d) {
+    readFaceComponent(file, group + "/u_" + kAxis[d], dec, d, f.u[d]);
+    readFaceComponent(file, group + "/H_" + kAxis[d], dec, d, fluid.history()[d]);
+  }
+  readCellField(file, group + "/p", dec, f.p);
+  readCellField(file, group + "/eps", dec, f.eps);
+  readCellField(file, group + "/eps_old", dec, f.epsOld);
+  readCellField(file, group + "/K", dec, f.K);
+  readCellVector(file, group + "/KUp", dec, f.KUp[0], f.KUp[1], f.KUp[2]);
+  fv::FluidCounters c;
+  c.time = file.attributeDouble(group, "time");
+  c.dtOld = file.attributeDouble(group, "dt_old");
+  c.dtLast = file.attributeDouble(group, "dt_last");
+  c.cflLast = file.attributeDouble(group, "cfl_last");
+  c.maxRate = file.attributeDouble(group, "max_rate");
+  c.steadyResidual = file.attributeDouble(group, "steady_residual");
+  c.resLast = file.attributeDouble(group, "residual_last");
+  c.rhsScaleLast = file.attributeDouble(group, "rhs_scale_last");
+  c.steps = file.attributeInt(group, "steps");
+  c.itSum = file.attributeInt(group, "iterations_sum");
+  c.solves = file.attributeInt(group, "solves");
+  c.setups = file.attributeInt(group, "setups");
+  c.itMax = file.attributeInt(group, "iterations_max");
+  c.itLast = file.attributeInt(group, "iterations_last");
+  c.haveOld = file.attributeInt(group, "have_old") != 0;
+  c.ratesStale = file.attributeInt(group, "rates_stale") != 0;
+  fluid.restoreState(c);
+}
+
+// ---- particles ----------------------------------------------------------------------------------
+
+void writeDemState(H5File& file, const std::string& group, const dem::DemState& s) {
+  const auto& p = s.particles;
+  const std::size_t n = p.nOwned;
+  file.createGroup(group);
+  writeParticleArray(file, group + "/id", std::span<const std::int64_t>(p.id.data(), n));
+  writeParticleArray(file, group + "/material", std::span<const int>(p.material.data(), n));
+  writeParticleVec3(file, group + "/x", firstRows(p.x, n));
+  writeParticleVec3(file, group + "/v", firstRows(p.v, n));
+  writeParticleVec3(file, group + "/omega", firstRows(p.omega, n));
+  writeParticleVec3(file, group + "/f", firstRows(p.f, n));
+  writeParticleVec3(file, group + "/torque", firstRows(p.torque, n));
+  writeParticleVec3(file, group + "/f_ext", firstRows(p.fExt, n));
+  writeParticleArray(file, group + "/radius", std::span<const double>(p.radius.data(), n));
+  writeParticleArray(file, group + "/mass", std::span<const double>(p.mass.data(), n));
+  const RowRange rows = rowsOf(file.comm(), static_cast<long long>(n));
+  file.setAttribute(group, "count", rows.total);
+  file.setAttribute(group, "time", s.time);
+  file.setAttribute(group, "steps", s.steps);
+  file.setAttribute(group, "rebuilds", s.rebuilds);
+  const std::string cg = group + "/contacts";
+  file.createGroup(cg);
+  const std::size_t m = s.contacts.size();
+  std::vector<std::int64_t> holder(m), partner(m);
+  std::array<std::vector<double>, 3> shear, roll;
+  for (int d = 0; d < 3; ++d) shear[d].resize(m), roll[d].resize(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    holder[i] = s.contacts[i].holder;
+    partner[i] = s.contacts[i].partner;
+    for (int d = 0; d < 3; ++d) {
+      shear[d][i] = s.contacts[i].shear[static_cast<std::size_t>(d)];
+      roll[d][i] = s.contacts[i].roll[static_cast<std::size_t>(d)];
+    }
+  }
+  writeParticleArray(file, cg + "/holder", std::span<const std::int64_t>(holder));
+  writeParticleArray(file, cg + "/partner", std::span<const std::int64_t>(partner));
+  writeParticleVec3(file, cg + "/shear", firstRows(shear, m));
+  writeParticleVec3(file, cg + "/roll", firstRows(roll, m));
+  file.setAttribute(cg, "count", rowsOf(file.comm(), static_cast<long long>(m)).total);
+}
+
+dem::DemState readDemState(H5File& file, const std::string& group) {
+  dem::DemState s;
+  const Comm& comm = file.comm();
+  const long long total = file.attributeInt(group, "count");
+  const RowRange r = evenRows(comm, total);
+  auto& p = s.particles;
+  p.nOwned = static_cast<std::size_t>(r.count);
+  p.nGhost = 0;
+  p.id = readParticleArray<std::int64_t>(file, group + "/id", r);
+  p.material = readParticleArray<int>(file, group + "/material", r);
+  p.x = readParticleVec3(file, group + "/x", r);
+  p.v = readParticleVec3(file, group + "/v", r);
+  p.omega = readParticleVec3(file, group + "/omega", r);
+  p.f = readParticleVec3(file, group + "/f", r);
+  p.torque = readParticleVec3(file, group + "/torque", r);
+  p.fExt = readParticleVec3(file, group + "/f_ext", r);
+  p.radius = readParticleArray<double>(file, group + "/radius", r);
+  p.mass = readParticleArray<double>(file, group + "/mass", r);
+  s.time = file.attributeDouble(group, "time");
+  s.steps = file.attributeInt(group, "steps");
+  s.rebuilds = file.attributeInt(group, "rebuilds");
+  const std::string cg = group + "/contacts";
+  const RowRange rc = evenRows(comm, file.attributeInt(cg, "count"));
+  const auto holder = readParticleArray<std::int64_t>(file, cg + "/holder", rc);
+  const auto partner = readParticleArray<std::int64_t>(file, cg + "/partner", rc);
+  const auto shear = readRows3(file, cg + "/shear", rc);
+  const auto roll = readRows3(file, cg + "/roll", rc);
+  s.contacts.resize(static_cast<std::size_t>(rc.count));
+  for (std::size_t i = 0; i < s.contacts.size(); ++i)
+    s.contacts[i] = dem::ContactHistory{holder[i], partner[i], shear[i], roll[i]};
+  return s;
+}
+
+dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long steps) {
+  dem::DemState s;
+  const std::size_t n = p.nOwned;
+  auto& q = s.particles;
+  q.nOwned = n;
+  q.id.assign(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(n));
+  q.material.assign(p.material.begin(), p.material.begin() + static_cast<std::ptrdiff_t>(n));
+  auto copy3 = [n](const std::array<std::vector<double>, 3>& a,
+                   std::array<std::vector<double>, 3>& b) {
+    for (int d = 0; d < 3; ++d)
+      b[d].assign(a[d].begin(), a[d].begin() + static_cast<std::ptrdiff_t>(n));
+  };
+  copy3(p.x, q.x);
+  copy3(p.v, q.v);
+  copy3(p.omega, q.omega);
+  copy3(p.f, q.f);
+  copy3(p.torque, q.torque);
+  copy3(p.fExt, q.fExt);
+  q.radius.assign(p.radius.begin(), p.radius.begin() + static_cast<std::ptrdiff_t>(n));
+  q.mass.assign(p.mass.begin(), p.mass.begin() + static_cast<std::ptrdiff_t>(n));
+  s.time = time;
+  s.steps = steps;
+  return s;
+}
+
+}  // namespace coloc::coupling
