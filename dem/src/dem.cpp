@@ -73,7 +73,7 @@ void ensure(std::vector<T>& v, std::size_t need) {
 }  // namespace
 
 struct DemSolver::Impl {
-  Impl(const Decomposition& d, const Config& cfg, Timers& t);
+  Impl(const Decomposition& d, const Config& cfg, Timers& t, DemState* initial = nullptr);
 
   const Decomposition& dec;
   Comm comm;
@@ -96,6 +96,7 @@ struct DemSolver::Impl {
   Real3 origin{}, L{}, bs{}, lo{}, hi{};
   std::array<bool, 3> periodic{};
   std::array<long long, 3> NbG{}, binLo{}, binHi{};
+  std::array<long long, 3> binSplit{1, 1, 1}, binMult{1, 1, 1};  // bin = cell/split or mult cells
   Int3 nb{}, nbx{};  // local bins, and with one ghost layer on each side
   std::vector<int> binOf, binStart, binItems;
 
@@ -169,12 +170,17 @@ struct DemSolver::Impl {
   void resizeAll(std::size_t n);
   std::size_t memory() const;
   void checkOverlap(double globalMax);
+  // state (checkpoint/restart)
+  int ownerRank(const double* x) const;
+  void restore(DemState& st);
+  DemState save();
+  std::string where() const;
 };
 
 // ---------------------------------------------------------------------------------------------
 // setup
 
-DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
+DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemState* initial)
     : dec(d), comm(d.comm()), timers(t) {
   ScopedPhase setup(timers, Phase::Setup);
   const auto& grid = dec.grid();
@@ -194,6 +200,14 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
     if (s.count > 0) rmax = std::max(rmax, s.rmax);
     total += s.count;
   }
+  if (initial) {
+    // a restart: the bins are those of the case (same sources: same bins as the run that wrote
+    // the state), widened only if the state holds larger particles than the sources
+    double rs = 0;
+    for (const double r : initial->particles.radius) rs = std::max(rs, r);
+    rmax = std::max(rmax, comm.max(rs));
+    if (total == 0) total = comm.sum(static_cast<long long>(initial->particles.nOwned));
+  }
   if (total > 0 && nMat == 0)
     throw ConfigError("particles.materials", "at least one material is required");
   const double dmax = 2 * rmax;
@@ -205,6 +219,10 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
                  wallsOn && !grid.periodic[k] && dec.atHighBoundary(k)};
   setupBins(cfg, dmax, total);
 
+  if (initial) {
+    restore(*initial);
+    return;
+  }
   detail::generate(
       cfg, info, lo, hi, [this](const double* x) { return owns(x); },
       [this](const detail::NewParticle& q) { addParticle(q); });
@@ -302,6 +320,8 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
       }
     }
     bs[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
+    binSplit[d] = split;
+    binMult[d] = split > 1 ? 1 : multiple;
     if (any && bs[d] < rc)
       throw ConfigError(key, "the bin edge " + fmt(bs[d]) + " m along " + kAxis[d] +
                                  " is smaller than " + range());
@@ -465,6 +485,11 @@ void DemSolver::Impl::finalIntegrate() {
   }
 }
 
+std::string DemSolver::Impl::where() const {
+  return " on rank " + std::to_string(dec.rank()) + " at step " + std::to_string(steps) +
+         ", t = " + fmt(time) + " s";
+}
+
 void DemSolver::Impl::checkOverlap(double globalMax) {
   if (globalMax <= overlapLimit) return;
   std::string msg;
@@ -472,8 +497,8 @@ void DemSolver::Impl::checkOverlap(double globalMax) {
     msg = "particle " + std::to_string(maxOverlapId) + " overlaps " +
           (maxOverlapPartner < 0 ? std::string("a wall")
                                  : "particle " + std::to_string(maxOverlapPartner)) +
-          " by " + fmt(maxOverlap) + " of its radius at t = " + fmt(time) +
-          " s (limit particles.overlap_limit = " + fmt(overlapLimit) +
+          " by " + fmt(maxOverlap) + " of the smaller radius" + where() +
+          " (limit particles.overlap_limit = " + fmt(overlapLimit) +
           "): reduce particles.dt, the velocities, or stiffen the material";
   }
   comm.raiseIfAny(msg);
@@ -578,10 +603,14 @@ void DemSolver::Impl::migrate() {
     for (std::size_t i = 0; i < n; ++i) {
       double& x = p.x[d][i];
       int dir = 0;
-      if (!std::isfinite(x)) {
+      if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i])) {
         if (err.empty())
-          err = "particle " + std::to_string(p.id[i]) +
-                " has a non-finite position at t = " + fmt(time) + " s";
+          err = "particle " + std::to_string(p.id[i]) + " has a non-finite " +
+                (!std::isfinite(x)           ? "position"
+                 : !std::isfinite(p.v[d][i]) ? "velocity"
+                                             : "angular velocity") +
+                where() + ": the run blew up (time step too large, or a NaN in the forces)";
+        dir = 0;
       } else if (periodic[d]) {
         const double top = origin[d] + L[d];
         if (x < origin[d]) {
@@ -599,8 +628,8 @@ void DemSolver::Impl::migrate() {
       } else if (x < origin[d] || x > origin[d] + L[d]) {
         if (err.empty())
           err = "particle " + std::to_string(p.id[i]) + " left the box through the " +
-                (x < origin[d] ? "low " : "high ") + kAxis[d] + " face at t = " + fmt(time) +
-                " s (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
+                (x < origin[d] ? "low " : "high ") + kAxis[d] + " face" + where() +
+                " (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
                 "): too fast for the walls, or walls are off";
       } else {
         const long long b = gbinClamped(x, d);
@@ -1030,10 +1059,225 @@ std::size_t DemSolver::Impl::memory() const {
 }
 
 // ---------------------------------------------------------------------------------------------
+// state: checkpoint/restart and re-balancing
+
+int DemSolver::Impl::ownerRank(const double* x) const {
+  Int3 cell{};
+  for (int d = 0; d < 3; ++d) {
+    const long long b = gbinClamped(x[d], d);
+    cell[d] = static_cast<int>(binSplit[d] > 1 ? b / binSplit[d] : b * binMult[d]);
+  }
+  return dec.ownerOfCell(cell);
+}
+
+namespace {
+/// Sends blocks[r] to rank r (all-to-all); returns what arrived, rank after rank.
+std::vector<double> sendBlocks(const Comm& comm, const std::vector<std::vector<double>>& blocks) {
+  const int P = comm.size();
+  std::vector<int> sc(static_cast<std::size_t>(P)), rc, sd, rd;
+  std::vector<double> send;
+  for (int r = 0; r < P; ++r) {
+    const auto& b = blocks[static_cast<std::size_t>(r)];
+    sc[static_cast<std::size_t>(r)] = static_cast<int>(b.size());
+    send.insert(send.end(), b.begin(), b.end());
+  }
+  comm.alltoall(sc, rc);
+  Comm::displacements(sc, sd);
+  std::vector<double> recv(static_cast<std::size_t>(Comm::displacements(rc, rd)));
+  comm.alltoallv(std::span<const double>(send), sc, sd, std::span<double>(recv), rc, rd);
+  return recv;
+}
+constexpr int kStateRec = 22;  // id, material, radius, mass, x3, v3, omega3, f3, torque3, fExt3
+constexpr int kHistRec = 5;    // holder, partner, shear3
+}  // namespace
+
+void DemSolver::Impl::restore(DemState& st) {
+  const int P = comm.size();
+  const auto& q = st.particles;
+  time = st.time;
+  steps = st.steps;
+  rebuilds = st.rebuilds;
+  // 1. particles to their owners (by position), a general all-to-all: any rank may hold any
+  //    subset of the state
+  std::vector<std::vector<double>> out(static_cast<std::size_t>(P));
+  for (std::size_t i = 0; i < q.nOwned; ++i) {
+    const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
+    auto& b = out[static_cast<std::size_t>(ownerRank(xi))];
+    b.push_back(static_cast<double>(q.id[i]));
+    b.push_back(q.material[i]);
+    b.push_back(q.radius[i]);
+    b.push_back(q.mass[i]);
+    for (const auto* a : {&q.x, &q.v, &q.omega, &q.f, &q.torque, &q.fExt})
+      for (int k = 0; k < 3; ++k) b.push_back((*a)[k][i]);
+  }
+  std::vector<double> in = sendBlocks(comm, out);
+  const std::size_t n = in.size() / kStateRec;
+  resizeAll(n);
+  p.nOwned = n;
+  p.nGhost = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* r = &in[i * kStateRec];
+    p.id[i] = static_cast<std::int64_t>(r[0]);
+    p.material[i] = static_cast<int>(r[1]);
+    p.radius[i] = r[2];
+    p.mass[i] = r[3];
+    for (int k = 0; k < 3; ++k) {
+      p.x[k][i] = r[4 + k];
+      p.v[k][i] = r[7 + k];
+      p.omega[k][i] = r[10 + k];
+      p.f[k][i] = r[13 + k];
+      p.torque[k][i] = r[16 + k];
+      p.fExt[k][i] = r[19 + k];
+    }
+  }
+  std::string err;
+  for (std::size_t i = 0; i < n && err.empty(); ++i)
+    if (p.material[i] < 0 || p.material[i] >= nMat)
+      err = "restored particle " + std::to_string(p.id[i]) + " has material " +
+            std::to_string(p.material[i]) + " (" + std::to_string(nMat) + " declared)";
+  comm.raiseIfAny(err);
+  // 2. histories to their holders through a directory (rank holder % P): the directory learns
+  //    every holder's owner, then forwards; a history may sit on any rank, apart from its holder
+  for (auto& b : out) b.clear();
+  for (const auto& c : st.contacts) {
+    if (c.holder < 0) {
+      if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
+      continue;
+    }
+    auto& b = out[static_cast<std::size_t>(c.holder % P)];
+    b.push_back(static_cast<double>(c.holder));
+    b.push_back(static_cast<double>(c.partner));
+    b.insert(b.end(), c.shear.begin(), c.shear.end());
+  }
+  comm.raiseIfAny(err);
+  st = DemState{};  // the input is no longer needed
+  const std::vector<double> hist = sendBlocks(comm, out);
+  for (auto& b : out) b.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    out[static_cast<std::size_t>(p.id[i] % P)].push_back(static_cast<double>(p.id[i]));
+  std::vector<double> reg = sendBlocks(comm, out);  // ids owned by each rank, rank after rank
+  {
+    std::vector<int> rc(static_cast<std::size_t>(P)), rd;
+    std::vector<int> sc(static_cast<std::size_t>(P));
+    for (int r = 0; r < P; ++r)
+      sc[static_cast<std::size_t>(r)] = static_cast<int>(out[static_cast<std::size_t>(r)].size());
+    comm.alltoall(sc, rc);
+    std::vector<std::pair<std::int64_t, int>> owner;  // (id, owner rank)
+    std::size_t k = 0;
+    for (int r = 0; r < P; ++r)
+      for (int c = 0; c < rc[static_cast<std::size_t>(r)]; ++c, ++k)
+        owner.emplace_back(static_cast<std::int64_t>(reg[k]), r);
+    std::sort(owner.begin(), owner.end());
+    for (auto& b : out) b.clear();
+    for (std::size_t h = 0; h + kHistRec <= hist.size(); h += kHistRec) {
+      const auto id = static_cast<std::int64_t>(hist[h]);
+      const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
+      if (it == owner.end() || it->first != id) {
+        if (err.empty())
+          err = "a restored contact history names holder " + std::to_string(id) +
+                ", which is not among the restored particles";
+        continue;
+      }
+      auto& b = out[static_cast<std::size_t>(it->second)];
+      b.insert(b.end(), hist.begin() + static_cast<std::ptrdiff_t>(h),
+               hist.begin() + static_cast<std::ptrdiff_t>(h + kHistRec));
+    }
+  }
+  comm.raiseIfAny(err);
+  const std::vector<double> mine = sendBlocks(comm, out);
+  // 3. history rows per local particle (the format migration and the list build use)
+  std::vector<std::pair<std::int64_t, int>> byId(n);
+  for (std::size_t i = 0; i < n; ++i) byId[i] = {p.id[i], static_cast<int>(i)};
+  std::sort(byId.begin(), byId.end());
+  const std::size_t nh = mine.size() / kHistRec;
+  std::vector<int> row(nh);
+  hStart.assign(n + 1, 0);
+  for (std::size_t h = 0; h < nh; ++h) {
+    const auto id = static_cast<std::int64_t>(mine[h * kHistRec]);
+    const auto it = std::lower_bound(byId.begin(), byId.end(), std::make_pair(id, -1));
+    row[h] = it->second;
+    ++hStart[static_cast<std::size_t>(row[h]) + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) hStart[i + 1] += hStart[i];
+  hId.assign(nh, 0);
+  hS.assign(3 * nh, 0.0);
+  iscr.assign(hStart.begin(), hStart.end() - 1);
+  for (std::size_t h = 0; h < nh; ++h) {
+    const auto e = static_cast<std::size_t>(iscr[static_cast<std::size_t>(row[h])]++);
+    hId[e] = static_cast<std::int64_t>(mine[h * kHistRec + 1]);
+    for (int k = 0; k < 3; ++k)
+      hS[3 * e + static_cast<std::size_t>(k)] = mine[h * kHistRec + 2 + k];
+  }
+  // 4. the canonical rebuild (same orders as the one inside saveState), no force recomputation:
+  //    the saved forces start the next velocity-Verlet half step; the force pass below only
+  //    refreshes the diagnostics (contacts, overlap) and leaves f, torque and histories as saved
+  checkTimeStep();
+  rebuild(true);
+  {
+    ScopedPhase f(timers, Phase::DemForce);
+    std::vector<double> keep;
+    keep.reserve(6 * n);
+    for (const auto* a : {&p.f, &p.torque})
+      for (int k = 0; k < 3; ++k) keep.insert(keep.end(), (*a)[k].begin(), (*a)[k].begin() + n);
+    computeForces(false);
+    std::size_t o = 0;
+    for (auto* a : {&p.f, &p.torque})
+      for (int k = 0; k < 3; ++k, o += n)
+        std::copy(keep.begin() + static_cast<std::ptrdiff_t>(o),
+                  keep.begin() + static_cast<std::ptrdiff_t>(o + n), (*a)[k].begin());
+  }
+  checkOverlap(comm.max(maxOverlap));
+}
+
+DemState DemSolver::Impl::save() {
+  rebuild(false);  // canonical: migration, (bin, id) order, lists; the restored run does the same
+  DemState st;
+  st.time = time;
+  st.steps = steps;
+  st.rebuilds = rebuilds;
+  const std::size_t n = p.nOwned;
+  auto& q = st.particles;
+  q.nOwned = n;
+  q.nGhost = 0;
+  q.id.assign(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(n));
+  q.material.assign(p.material.begin(), p.material.begin() + static_cast<std::ptrdiff_t>(n));
+  q.radius.assign(p.radius.begin(), p.radius.begin() + static_cast<std::ptrdiff_t>(n));
+  q.mass.assign(p.mass.begin(), p.mass.begin() + static_cast<std::ptrdiff_t>(n));
+  for (int k = 0; k < 3; ++k) {
+    const auto cp = [n](const std::vector<double>& a, std::vector<double>& b) {
+      b.assign(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(n));
+    };
+    cp(p.x[k], q.x[k]);
+    cp(p.v[k], q.v[k]);
+    cp(p.omega[k], q.omega[k]);
+    cp(p.f[k], q.f[k]);
+    cp(p.torque[k], q.torque[k]);
+    cp(p.fExt[k], q.fExt[k]);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
+      const double* sh = &shear[3 * static_cast<std::size_t>(e)];
+      if (sh[0] == 0 && sh[1] == 0 && sh[2] == 0) continue;
+      const int j = nbr[static_cast<std::size_t>(e)];
+      ContactHistory c;
+      c.holder = p.id[i];
+      c.partner = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+      c.shear = {sh[0], sh[1], sh[2]};
+      st.contacts.push_back(c);
+    }
+  return st;
+}
+
+// ---------------------------------------------------------------------------------------------
 // public interface
 
 DemSolver::DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers)
     : impl_(std::make_unique<Impl>(dec, cfg, timers)) {}
+DemSolver::DemSolver(const Decomposition& dec, const Config& cfg, Timers& timers, DemState initial)
+    : impl_(std::make_unique<Impl>(dec, cfg, timers, &initial)) {}
+DemState DemSolver::saveState() {
+  return impl_->save();
+}
 DemSolver::~DemSolver() = default;
 ParticleStore& DemSolver::particles() {
   return impl_->p;
