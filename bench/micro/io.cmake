@@ -3,3 +3,4 @@
 add_executable(bench_io ${CMAKE_CURRENT_LIST_DIR}/bench_io.cpp ${CMAKE_CURRENT_LIST_DIR}/bench_main.cpp)
 target_link_libraries(bench_io PRIVATE coloc::partition benchmark::benchmark)
 set_target_properties(bench_io PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/bench)
+coloc_bench_smoke(bench_io 2 "BM_WriteCellField/64/|BM_ReadCellField/64/")

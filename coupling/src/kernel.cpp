@@ -19,10 +19,9 @@ long long Stencils::compute(KernelKind kind, const Decomposition& dec, const Fie
                             std::span<const double> z, std::size_t n) {
   width_ = kind == KernelKind::Centroid ? 1 : 8;
   n_ = n;
-  if (cell_.size() < n * width_) {
-    cell_.resize(n * width_);
-    weight_.resize(n * width_);
-  }
+  if (base_.size() < n) base_.resize(n + n / 4);
+  if (width_ > 1 && frac_[0].size() < n)
+    for (auto& f : frac_) f.resize(n + n / 4);
   const auto lo = dec.blockLo();
   const auto& g = dec.grid();
   const double inv[3] = {1.0 / g.spacing(0), 1.0 / g.spacing(1), 1.0 / g.spacing(2)};
@@ -37,15 +36,14 @@ long long Stencils::compute(KernelKind kind, const Decomposition& dec, const Fie
     throw Error(
         "coupling: a block of more than 2^31 cells (with ghosts) per rank is not supported; "
         "use more ranks");
-  const std::int32_t sy = e[0], sz = static_cast<std::int32_t>(e[0]) * e[1];
-  const std::int32_t off = layout.ghost + layout.ghost * sy + layout.ghost * sz;
+  sy_ = e[0];
+  sz_ = static_cast<std::int32_t>(e[0]) * e[1];
+  const std::int32_t off = layout.ghost + layout.ghost * sy_ + layout.ghost * sz_;
   long long bad = -1;
   for (std::size_t p = 0; p < n; ++p) {
     const double s[3] = {(x[p] - lo[0]) * inv[0], (y[p] - lo[1]) * inv[1], (z[p] - lo[2]) * inv[2]};
-    std::int32_t* c = cell_.data() + p * width_;
-    double* w = weight_.data() + p * width_;
+    int i[3];
     if (kind == KernelKind::Centroid) {
-      int i[3];
       for (int d = 0; d < 3; ++d) {
         i[d] = static_cast<int>(std::floor(s[d]));
         // A centre exactly on the top face of the box belongs to the last cell.
@@ -53,51 +51,44 @@ long long Stencils::compute(KernelKind kind, const Decomposition& dec, const Fie
         if (i[d] < box.lo[d] || i[d] >= box.hi[d]) bad = bad < 0 ? static_cast<long long>(p) : bad;
         i[d] = std::clamp(i[d], box.lo[d], box.hi[d] - 1);
       }
-      c[0] = off + i[0] + i[1] * sy + i[2] * sz;
-      w[0] = 1.0;
-      continue;
-    }
-    int i0[3];
-    double t[3];
-    for (int d = 0; d < 3; ++d) {
-      const double u = s[d] - 0.5;
-      i0[d] = static_cast<int>(std::floor(u));
-      t[d] = u - i0[d];
-      if (i0[d] < box.lo[d] || i0[d] + 1 >= box.hi[d]) {
-        bad = bad < 0 ? static_cast<long long>(p) : bad;
-        i0[d] = std::clamp(i0[d], box.lo[d], box.hi[d] - 2);
+    } else {
+      for (int d = 0; d < 3; ++d) {
+        const double u = s[d] - 0.5;
+        i[d] = static_cast<int>(std::floor(u));
+        frac_[d][p] = u - i[d];
+        if (i[d] < box.lo[d] || i[d] + 1 >= box.hi[d]) {
+          bad = bad < 0 ? static_cast<long long>(p) : bad;
+          i[d] = std::clamp(i[d], box.lo[d], box.hi[d] - 2);
+        }
       }
     }
-    int m = 0;
-    for (int dk = 0; dk < 2; ++dk)
-      for (int dj = 0; dj < 2; ++dj)
-        for (int di = 0; di < 2; ++di, ++m) {
-          c[m] = off + (i0[0] + di) + (i0[1] + dj) * sy + (i0[2] + dk) * sz;
-          w[m] = (di ? t[0] : 1.0 - t[0]) * (dj ? t[1] : 1.0 - t[1]) * (dk ? t[2] : 1.0 - t[2]);
-        }
+    base_[p] = off + i[0] + i[1] * sy_ + i[2] * sz_;
   }
   return bad;
 }
 
 void deposit(const Stencils& s, std::span<const double> q, double scale, CellField& f) {
   double* data = f.data().data();
-  const int w = s.width();
   for (std::size_t p = 0; p < s.count(); ++p) {
     const double v = scale * (q.empty() ? 1.0 : q[p]);
-    const auto c = s.cells(p);
-    const auto wt = s.weights(p);
-    for (int m = 0; m < w; ++m) data[c[m]] += wt[m] * v;
+    s.forEachCell(p, [&](std::int32_t c, double w) { data[c] += w * v; });
+  }
+}
+
+void depositProduct(const Stencils& s, std::span<const double> a, std::span<const double> b,
+                    double scale, CellField& f) {
+  double* data = f.data().data();
+  for (std::size_t p = 0; p < s.count(); ++p) {
+    const double v = scale * (a[p] * b[p]);
+    s.forEachCell(p, [&](std::int32_t c, double w) { data[c] += w * v; });
   }
 }
 
 void interpolate(const Stencils& s, const CellField& f, std::span<double> out) {
   const double* data = f.data().data();
-  const int w = s.width();
   for (std::size_t p = 0; p < s.count(); ++p) {
-    const auto c = s.cells(p);
-    const auto wt = s.weights(p);
     double acc = 0.0;
-    for (int m = 0; m < w; ++m) acc += wt[m] * data[c[m]];
+    s.forEachCell(p, [&](std::int32_t c, double w) { acc += w * data[c]; });
     out[p] = acc;
   }
 }

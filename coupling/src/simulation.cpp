@@ -257,24 +257,20 @@ void Simulation::resizeParticleBuffers(std::size_t n) {
   const std::size_t cap = std::max(n, volume_.size() + volume_.size() / 4);
   for (auto* v : {&volume_, &beta_, &epsAt_}) v->resize(cap);
   for (int d = 0; d < 3; ++d)
-    for (auto* a : {&uAt_, &vDep_, &betaV_, &gradPAt_, &force_}) (*a)[d].resize(cap);
+    for (auto* a : {&uAt_, &vDep_, &gradPAt_}) (*a)[d].resize(cap);
 }
 
 void Simulation::gatherParticles() {
   const auto& p = dem_->particles();
   const std::size_t n = p.nOwned;
   if (!demDec_) {
-    // Co-located: the kernels read the DEM's own arrays; only the non-drag force is derived.
-    ScopedPhase t(timers_, Phase::CouplingDrag);
-    for (int d = 0; d < 3; ++d) {
-      if (nonDrag_[d].size() < n) nonDrag_[d].resize(n + n / 4);
-      for (std::size_t i = 0; i < n; ++i) nonDrag_[d][i] = p.f[d][i] - p.fExt[d][i];
-    }
+    // Co-located: the kernels read the DEM's own arrays.
     view_.n = n;
     for (int d = 0; d < 3; ++d) {
       view_.x[d] = p.x[d].data();
       view_.v[d] = p.v[d].data();
-      view_.nonDrag[d] = nonDrag_[d].data();
+      view_.force[d] = p.f[d].data();
+      view_.held[d] = p.fExt[d].data();
     }
     view_.radius = p.radius.data();
     view_.mass = p.mass.data();
@@ -361,7 +357,8 @@ void Simulation::gatherParticles() {
   for (int d = 0; d < 3; ++d) {
     view_.x[d] = X.x[d].data();
     view_.v[d] = X.v[d].data();
-    view_.nonDrag[d] = X.nonDrag[d].data();
+    view_.force[d] = X.nonDrag[d].data();
+    view_.held[d] = nullptr;
   }
   view_.radius = X.radius.data();
   view_.mass = X.mass.data();
@@ -456,11 +453,10 @@ void Simulation::evaluateDrag(double dt) {
       const double m = p.mass[i];
       beta_[i] = beta / (1.0 + dt * beta / m);
       for (int d = 0; d < 3; ++d) {
-        const double nonDrag = p.nonDrag[d][i] - volume_[i] * rhoF_ * gradPAt_[d][i];
+        const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
         vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
       }
     }
-    for (int d = 0; d < 3; ++d) betaV_[d][i] = beta_[i] * vDep_[d][i];
   }
 }
 
@@ -476,7 +472,8 @@ void Simulation::depositParticles() {
   deposit(stencils_, std::span<const double>(volume_.data(), n), 1.0 / vCell, solid_);
   deposit(stencils_, std::span<const double>(beta_.data(), n), s, f.K);
   for (int d = 0; d < 3; ++d)
-    deposit(stencils_, std::span<const double>(betaV_[d].data(), n), s, f.KUp[d]);
+    depositProduct(stencils_, std::span<const double>(beta_.data(), n),
+                   std::span<const double>(vDep_[d].data(), n), s, f.KUp[d]);
 }
 
 void Simulation::sumDepositsAcrossBlocks() {
@@ -555,7 +552,7 @@ void Simulation::applyCouplingForces(double dt) {
   for (std::size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) {
       const double drag = beta_[i] * (uAt_[d][i] - vDep_[d][i]);
-      force_[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
+      forceAt_[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];  // in place of grad p
       sums[d] += drag * dt;
       sums[6 + d] += beta_[i] * (std::abs(uAt_[d][i]) + std::abs(vDep_[d][i])) * dt;
     }
@@ -583,7 +580,7 @@ void Simulation::handForcesToParticles() {
   if (!demDec_) {
     ScopedPhase t(timers_, Phase::ExchangeLocal);
     const std::size_t n = stencils_.count();
-    for (int d = 0; d < 3; ++d) std::copy_n(force_[d].data(), n, p.fExt[d].data());
+    for (int d = 0; d < 3; ++d) std::copy_n(forceAt_[d].data(), n, p.fExt[d].data());
     timers_.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n * sizeof(double)), 0);
     return;
   }
@@ -600,7 +597,7 @@ void Simulation::handForcesToParticles() {
   Comm::displacements(X.recvCounts, X.recvDispl);
   Comm::displacements(X.sendCounts, X.sendDispl);
   for (std::size_t k = 0; k < m; ++k)
-    for (int d = 0; d < 3; ++d) X.recvBuf[3 * k + static_cast<std::size_t>(d)] = force_[d][k];
+    for (int d = 0; d < 3; ++d) X.recvBuf[3 * k + static_cast<std::size_t>(d)] = forceAt_[d][k];
   const std::size_t n = p.nOwned;
   comm.alltoallv(std::span<const double>(X.recvBuf.data(), 3 * m), X.recvCounts, X.recvDispl,
                  std::span<double>(X.sendBuf.data(), 3 * n), X.sendCounts, X.sendDispl);

@@ -58,7 +58,7 @@ TEST_P(KernelTest, DepositConservesTotalsAcrossBlocks) {
   EXPECT_EQ(s.compute(GetParam(), dec, f.layout(), x, y, z, x.size()), -1);
   for (std::size_t p = 0; p < x.size(); ++p) {
     double sum = 0;
-    for (double w : s.weights(p)) sum += w;
+    s.forEachCell(p, [&](std::int32_t, double w) { sum += w; });
     ASSERT_NEAR(sum, 1.0, 1e-14);
   }
   deposit(s, q, 1.0, f);

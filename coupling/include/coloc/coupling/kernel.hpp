@@ -13,6 +13,7 @@
 // fillWallGhostsByMirror() at walls, the adjoint of that fold.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -37,23 +38,43 @@ class Stencils {
                     std::size_t n);
   int width() const { return width_; }
   std::size_t count() const { return n_; }
-  /// Linear indices into Field3::data() (32-bit: a block holds < 2^31 cells) and weights of p.
-  std::span<const std::int32_t> cells(std::size_t p) const {
-    return {cell_.data() + p * width_, static_cast<std::size_t>(width_)};
+  /// Calls f(cell, weight) for the cells of particle p: cell is a linear index into
+  /// Field3::data(), the weights sum to 1. A stencil is stored compactly (28 bytes a particle for
+  /// the trilinear kernel, 4 for the centroid): the first cell (32-bit: a block holds < 2^31
+  /// cells) and the fractional offsets, from which the 8 tensor-product weights are formed.
+  template <class F>
+  void forEachCell(std::size_t p, F&& f) const {
+    const std::int32_t c0 = base_[p];
+    if (width_ == 1) {
+      f(c0, 1.0);
+      return;
+    }
+    const double t[3] = {frac_[0][p], frac_[1][p], frac_[2][p]};
+    for (int dk = 0; dk < 2; ++dk)
+      for (int dj = 0; dj < 2; ++dj)
+        for (int di = 0; di < 2; ++di)
+          f(c0 + di + dj * sy_ + dk * sz_,
+            (di ? t[0] : 1.0 - t[0]) * (dj ? t[1] : 1.0 - t[1]) * (dk ? t[2] : 1.0 - t[2]));
   }
-  std::span<const double> weights(std::size_t p) const {
-    return {weight_.data() + p * width_, static_cast<std::size_t>(width_)};
+  /// Bytes held (capacities).
+  std::size_t memoryBytes() const {
+    return base_.capacity() * sizeof(std::int32_t) +
+           (frac_[0].capacity() + frac_[1].capacity() + frac_[2].capacity()) * sizeof(double);
   }
 
  private:
   int width_ = 1;
   std::size_t n_ = 0;
-  std::vector<std::int32_t> cell_;
-  std::vector<double> weight_;
+  std::int32_t sy_ = 0, sz_ = 0;
+  std::vector<std::int32_t> base_;
+  std::array<std::vector<double>, 3> frac_;
 };
 
 /// f_c += sum_i w_ic * scale * q_i over the stencils (q empty: q_i = 1).
 void deposit(const Stencils& s, std::span<const double> q, double scale, CellField& f);
+/// f_c += sum_i w_ic * scale * (a_i b_i): a deposit of a product without storing it.
+void depositProduct(const Stencils& s, std::span<const double> a, std::span<const double> b,
+                    double scale, CellField& f);
 /// out_i = sum_c w_ic f_c.
 void interpolate(const Stencils& s, const CellField& f, std::span<double> out);
 /// One pass of a conservative, self-adjoint smoothing filter on the owned cells:

@@ -145,7 +145,11 @@ class Simulation {
   /// proxies received from the DEM ranks (independent).
   struct ParticleView {
     std::size_t n = 0;
-    std::array<const double*, 3> x{}, v{}, nonDrag{};
+    /// The non-drag force on particle i is force[d][i] - held[d][i]: the DEM's last total force
+    /// less the coupling force it held (co-located), or the value received with the proxy
+    /// (independent: held is null).
+    std::array<const double*, 3> x{}, v{}, force{}, held{};
+    double nonDrag(int d, std::size_t i) const { return force[d][i] - (held[d] ? held[d][i] : 0.0); }
     const double* radius = nullptr;
     const double* mass = nullptr;
     const std::int64_t* id = nullptr;
@@ -182,11 +186,14 @@ class Simulation {
   HaloPlan halo_;
   Stencils stencils_;
 
-  // Per-particle buffers (the particles of the view; grow-only).
+  // Per-particle buffers (the particles of the view; grow-only): 15 doubles and a compact
+  // stencil a particle. applyCouplingForces() replaces the sampled grad p by the coupling force
+  // in place (forceAt_ names the same storage), which handForcesToParticles() hands over.
   ParticleView view_;
   ProxyExchange proxy_;
   std::vector<double> volume_, beta_, epsAt_;
-  std::array<std::vector<double>, 3> uAt_, vDep_, betaV_, gradPAt_, force_, nonDrag_;
+  std::array<std::vector<double>, 3> uAt_, vDep_, gradPAt_;
+  std::array<std::vector<double>, 3>& forceAt_ = gradPAt_;
 
   double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
