@@ -23,7 +23,8 @@ void declareOutputConfig(Schema& s) {
             Range::nonNegative());
   s.string("output.checkpoint_file", "checkpoint.h5",
            "checkpoint file, relative to output.dir; each checkpoint replaces it atomically "
-           "(written as FILE.tmp, renamed when complete)");
+           "(written as FILE.tmp, renamed when complete); {step} in the name is replaced by the "
+           "zero-padded step to keep every checkpoint (e.g. ck_{step}.h5)");
   s.boolean("output.checkpoint_on_failure", true,
             "when the run fails (NaN, CFL, a particle leaving the box, ...), write the state at "
             "the failure to FILE with .failed before .h5 (status attribute 'failed: ...'); the "
@@ -39,6 +40,15 @@ CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::stri
   const std::string dir = outputOptionsFromConfig(cfg, runOutDir).dir;
   o.path = file.is_absolute() ? file.string() : (std::filesystem::path(dir) / file).string();
   return o;
+}
+
+std::string CheckpointOptions::pathAt(long long step) const {
+  const std::string key = "{step}";
+  const auto at = path.find(key);
+  if (at == std::string::npos) return path;
+  char b[32];
+  std::snprintf(b, sizeof b, "%06lld", step);
+  return path.substr(0, at) + b + path.substr(at + key.size());
 }
 
 std::string failedCheckpointPath(const std::string& path) {

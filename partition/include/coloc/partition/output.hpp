@@ -41,7 +41,12 @@ struct CheckpointOptions {
   long long intervalSteps = 0;  // 0: none
   std::string path;             // the checkpoint file (output.dir / output.checkpoint_file)
   bool onFailure = true;        // write failedCheckpointPath(path) when the run fails
-  bool due(long long step) const { return intervalSteps > 0 && step > 0 && step % intervalSteps == 0; }
+  bool due(long long step) const {
+    return intervalSteps > 0 && step > 0 && step % intervalSteps == 0;
+  }
+  /// The file of the checkpoint at `step`: path with "{step}" replaced by the zero-padded step
+  /// (6 digits), e.g. "ck_{step}.h5" -> "ck_000120.h5"; path itself without the placeholder.
+  std::string pathAt(long long step) const;
 };
 
 /// output.{interval_steps,fields,particles,dir,checkpoint_interval,checkpoint_file,
