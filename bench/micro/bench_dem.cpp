@@ -12,6 +12,10 @@
 //                               arrays), rss_per_particle (peak RSS growth from before the solver
 //                               was built), and the time split of the timed steps.
 //                               DEM_BED_DUMP=file writes the settled bed as a LIGGGHTS data file.
+//                               DEM_BED_SAVE=file (1 rank) writes the settled DemState (particles,
+//                               forces, contact histories; binary), DEM_BED_LOAD=file restores it
+//                               instead of settling (rank r reads rows [r n/P, (r+1) n/P); the
+//                               restoring constructor sends them to their owners).
 // Benchmarks that exchange MPI messages use fixed iteration counts so every rank runs the same
 // number; the reported time is the slowest rank's (manual time).
 #include <benchmark/benchmark.h>
@@ -137,6 +141,68 @@ void BM_ForceLoop(benchmark::State& state) {
   state.counters["ranks"] = p.dec.size();
 }
 
+constexpr int kRec = 22;  // id, material, radius, mass, x, v, omega, f, torque, fExt
+
+void saveState(const coloc::dem::DemState& st, const std::string& file) {
+  std::vector<double> buf = {static_cast<double>(st.particles.nOwned),
+                             static_cast<double>(st.contacts.size()), st.time,
+                             static_cast<double>(st.steps), static_cast<double>(st.rebuilds)};
+  const auto& q = st.particles;
+  for (std::size_t i = 0; i < q.nOwned; ++i) {
+    buf.push_back(static_cast<double>(q.id[i]));
+    buf.push_back(q.material[i]);
+    buf.push_back(q.radius[i]);
+    buf.push_back(q.mass[i]);
+    for (const auto* a : {&q.x, &q.v, &q.omega, &q.f, &q.torque, &q.fExt})
+      for (int k = 0; k < 3; ++k) buf.push_back((*a)[k][i]);
+  }
+  for (const auto& c : st.contacts) {
+    buf.push_back(static_cast<double>(c.holder));
+    buf.push_back(static_cast<double>(c.partner));
+    buf.insert(buf.end(), c.shear.begin(), c.shear.end());
+  }
+  std::ofstream out(file, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(buf.data()),
+            static_cast<std::streamsize>(buf.size() * sizeof(double)));
+}
+
+coloc::dem::DemState loadState(const std::string& file, int rank, int size) {
+  std::ifstream in(file, std::ios::binary);
+  double h[5];
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  const auto n = static_cast<std::size_t>(h[0]), nc = static_cast<std::size_t>(h[1]);
+  std::vector<double> buf(n * kRec + 5 * nc);
+  in.read(reinterpret_cast<char*>(buf.data()),
+          static_cast<std::streamsize>(buf.size() * sizeof(double)));
+  if (!in) throw coloc::Error("DEM_BED_LOAD: cannot read " + file);
+  coloc::dem::DemState st;
+  st.time = h[2];
+  st.steps = static_cast<long long>(h[3]);
+  st.rebuilds = static_cast<long long>(h[4]);
+  const auto P = static_cast<std::size_t>(size), r = static_cast<std::size_t>(rank);
+  auto& q = st.particles;
+  for (std::size_t i = r * n / P; i < (r + 1) * n / P; ++i) {
+    const double* b = &buf[i * kRec];
+    q.id.push_back(static_cast<std::int64_t>(b[0]));
+    q.material.push_back(static_cast<int>(b[1]));
+    q.radius.push_back(b[2]);
+    q.mass.push_back(b[3]);
+    int o = 4;
+    for (auto* a : {&q.x, &q.v, &q.omega, &q.f, &q.torque, &q.fExt})
+      for (int k = 0; k < 3; ++k) (*a)[k].push_back(b[o++]);
+    ++q.nOwned;
+  }
+  for (std::size_t c = r * nc / P; c < (r + 1) * nc / P; ++c) {
+    const double* b = &buf[n * kRec + 5 * c];
+    coloc::dem::ContactHistory ch;
+    ch.holder = static_cast<std::int64_t>(b[0]);
+    ch.partner = static_cast<std::int64_t>(b[1]);
+    ch.shear = {b[2], b[3], b[4]};
+    st.contacts.push_back(ch);
+  }
+  return st;
+}
+
 void BM_DemBed(benchmark::State& state) {
   const char* env = std::getenv("DEM_BED_CASE");
   const std::string path = env ? env : COLOC_SOURCE_DIR "/bench/cases/dem-bed.json";
@@ -147,8 +213,14 @@ void BM_DemBed(benchmark::State& state) {
   const auto cfg = coloc::Config::load(comm, path, {}, schema());
   const auto dec = coloc::decompositionFromConfig(comm, cfg);
   coloc::Timers timers;
-  coloc::dem::DemSolver dem(dec, cfg, timers);
+  const char* load = std::getenv("DEM_BED_LOAD");
+  auto demPtr = load ? std::make_unique<coloc::dem::DemSolver>(
+                           dec, cfg, timers, loadState(load, dec.rank(), dec.size()))
+                     : std::make_unique<coloc::dem::DemSolver>(dec, cfg, timers);
+  auto& dem = *demPtr;
   for (int s = 0; s < settle; ++s) dem.substep();
+  if (const char* save = std::getenv("DEM_BED_SAVE"); save && dec.size() == 1)
+    saveState(dem.saveState(), save);
   // DEM_BED_DUMP=file (1 rank): the settled bed as a LIGGGHTS/LAMMPS data file (atom_style
   // granular), for the side-by-side comparison of docs/dem.md.
   if (const char* dump = std::getenv("DEM_BED_DUMP"); dump && dec.size() == 1) {

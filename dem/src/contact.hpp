@@ -137,6 +137,61 @@ inline double contactForce(const PairCoeff& c, double dt, bool update, const dou
   return std::fabs(Fn);
 }
 
+/// One particle pair, computed once (Newton's third law). The same law as contactForce; the
+/// results are returned instead of accumulated, so that each side adds them in its own canonical
+/// order:  force on i: +Fp, on j: -Fp;  torque on i: -r_i nxft - roll, on j: -r_j nxft + roll
+/// (nxft = n x F_t, roll = the rolling-resistance torque on i, zero when mu_r = 0).
+template <Model M>
+inline void pairForce(const PairCoeff& c, double dt, bool update, const double* n, double delta,
+                      double Reff, double meff, const double* vr, const double* wsum,
+                      const double* wrel, double* shear, double* Fp, double* nxft, double* roll) {
+  double kn, kt, gn, gt;
+  if constexpr (M == Model::HertzMindlin) {
+    const double sq = std::sqrt(Reff * delta);
+    const double Sn = 2.0 * c.Estar * sq, St = 8.0 * c.Gstar * sq;
+    kn = (2.0 / 3.0) * Sn;
+    kt = St;
+    gn = c.dampH * std::sqrt(Sn * meff);
+    gt = c.tOverN * gn;
+  } else {
+    kn = c.kn;
+    kt = c.kt;
+    gn = c.dampL * std::sqrt(kn * meff);
+    gt = c.dampL * std::sqrt(kt * meff);
+  }
+  const double vn = dot3(vr, n);
+  const double Fn = kn * delta - gn * vn;
+  double wxn[3];
+  cross3(wsum, n, wxn);
+  const double vt[3] = {vr[0] - vn * n[0] - wxn[0], vr[1] - vn * n[1] - wxn[1],
+                        vr[2] - vn * n[2] - wxn[2]};
+  if (update) {
+    const double sn = dot3(shear, n);
+    for (int k = 0; k < 3; ++k) shear[k] += vt[k] * dt - sn * n[k];
+  }
+  double Ft[3] = {-kt * shear[0], -kt * shear[1], -kt * shear[2]};
+  const double ftMax = c.mu * std::fabs(Fn);
+  const double ft2 = dot3(Ft, Ft);
+  if (ft2 > ftMax * ftMax) {
+    const double ratio = ftMax / std::sqrt(ft2);
+    for (int k = 0; k < 3; ++k) Ft[k] *= ratio;
+    if (update && kt > 0)
+      for (int k = 0; k < 3; ++k) shear[k] = -Ft[k] / kt;
+  } else {
+    for (int k = 0; k < 3; ++k) Ft[k] -= gt * vt[k];
+  }
+  for (int k = 0; k < 3; ++k) Fp[k] = Fn * n[k] + Ft[k];
+  cross3(n, Ft, nxft);
+  roll[0] = roll[1] = roll[2] = 0;
+  if (c.muR > 0) {
+    const double w = std::sqrt(dot3(wrel, wrel));
+    if (w > 0) {
+      const double s = c.muR * Reff * std::fabs(Fn) / w;
+      for (int k = 0; k < 3; ++k) roll[k] = s * wrel[k];
+    }
+  }
+}
+
 /// Elastic energy stored in the normal spring at overlap delta.
 inline double normalEnergy(Model m, const PairCoeff& c, double delta, double Reff) {
   if (m == Model::HertzMindlin)

@@ -544,24 +544,74 @@ void DemSolver::Impl::rebuild(bool first) {
 }
 
 void DemSolver::Impl::packHistory() {
-  const std::size_t n = p.nOwned;
+  // Rows of the touching histories per owned particle (the format migration carries and the
+  // list build reads), keyed by the partner's global id (walls: -1..-6), shear as seen from the
+  // row's particle. An owned-owned pair has one row, under its list holder, and a second one
+  // under the partner when the two are bound for different ranks or only one of them wraps
+  // across a periodic face (the pair is then computed by each side for its own particle, with
+  // its own copy, as every owned-ghost pair).
+  const std::size_t n = p.nOwned, nAll = p.size();
+  ensure(iscr, n);
+  iscr.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {  // destination rank and periodic wrap of every particle
+    double x[3];
+    int wrap = 0;
+    for (int d = 0, w = 1; d < 3; ++d, w *= 3) {
+      x[d] = p.x[d][i];
+      if (periodic[d]) {
+        if (x[d] < origin[d]) {
+          x[d] += L[d];
+          wrap += w;
+        } else if (x[d] >= origin[d] + L[d]) {
+          x[d] -= L[d];
+          wrap += 2 * w;
+        }
+      }
+    }
+    iscr[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
+  }
+  const auto both = [&](std::size_t a, std::size_t j) {
+    return j < n && (a >= n || iscr[a] != iscr[j]);
+  };
   ensure(hStart, n + 1);
-  hStart.resize(n + 1);
-  hId.clear();
-  hS.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    hStart[i] = static_cast<int>(hId.size());
-    ensure(hId, hId.size() + 64);
-    ensure(hS, hS.size() + 3 * 64);
-    for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
+  hStart.assign(n + 1, 0);
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const auto a = static_cast<std::size_t>(binItems[q]);
+    for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
       const double* s = &shear[3 * static_cast<std::size_t>(e)];
       if (s[0] == 0 && s[1] == 0 && s[2] == 0) continue;
       const int j = nbr[static_cast<std::size_t>(e)];
-      hId.push_back(j >= 0 ? p.id[static_cast<std::size_t>(j)] : j);
-      hS.insert(hS.end(), s, s + 3);
+      if (a < n) ++hStart[a + 1];
+      if (j >= 0 && both(a, static_cast<std::size_t>(j))) ++hStart[static_cast<std::size_t>(j) + 1];
     }
   }
-  hStart[n] = static_cast<int>(hId.size());
+  for (std::size_t i = 0; i < n; ++i) hStart[i + 1] += hStart[i];
+  const auto total = static_cast<std::size_t>(hStart[n]);
+  ensure(hId, total);
+  hId.resize(total);
+  ensure(hS, 3 * total);
+  hS.resize(3 * total);
+  std::vector<int>& cur = perm;  // free until the re-sort
+  ensure(cur, n);
+  cur.assign(hStart.begin(), hStart.end() - 1);
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const auto a = static_cast<std::size_t>(binItems[q]);
+    for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
+      const double* s = &shear[3 * static_cast<std::size_t>(e)];
+      if (s[0] == 0 && s[1] == 0 && s[2] == 0) continue;
+      const int j = nbr[static_cast<std::size_t>(e)];
+      if (a < n) {
+        const auto r = static_cast<std::size_t>(cur[a]++);
+        hId[r] = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+        for (int k = 0; k < 3; ++k) hS[3 * r + static_cast<std::size_t>(k)] = s[k];
+      }
+      if (j >= 0 && both(a, static_cast<std::size_t>(j))) {
+        const auto r = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
+        hId[r] = p.id[a];
+        for (int k = 0; k < 3; ++k) hS[3 * r + static_cast<std::size_t>(k)] = -s[k];
+      }
+    }
+  }
 }
 
 void DemSolver::Impl::exchange(int d, int tagBase, bool sizesKnown) {
@@ -902,58 +952,93 @@ void DemSolver::Impl::buildLists() {
         return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)];
       });
   }
-  // full Verlet list of owned rows: stencil bins in fixed order, partners by id inside a bin
-  ensure(rowStart, n + 1);
-  rowStart.resize(n + 1);
+  // Half list. binItems is every local particle in (bin, id) order: the canonical key K (the
+  // bin's (z, y, x) position, unwrapped across periodic faces, then the global id) orders the
+  // holders the same way at any rank count. The row of holder a lists the partners b with
+  // K_b > K_a: the rest of a's bin, then the 13 forward stencil bins in increasing index, each
+  // in increasing id; at least one of a, b is owned (ghost holders list owned partners only).
+  // Walls close the rows of owned particles.
+  ensure(rowStart, nAll + 1);
+  rowStart.resize(nAll + 1);
   nbr.clear();
   shear.clear();
   const int sy = nbx[0], sz = nbx[0] * nbx[1];
+  int fwd[13][3], nf = 0;
+  for (int dz = 0; dz <= 1; ++dz)
+    for (int dy = dz == 0 ? 0 : -1; dy <= 1; ++dy)
+      for (int dx = (dz == 0 && dy == 0) ? 1 : -1; dx <= 1; ++dx) {
+        fwd[nf][0] = dx;
+        fwd[nf][1] = dy;
+        fwd[nf][2] = dz;
+        ++nf;
+      }
   const double* X = p.x[0].data();
   const double* Y = p.x[1].data();
   const double* Z = p.x[2].data();
   const double* R = p.radius.data();
-  const auto lookup = [&](std::size_t i, std::int64_t partner) {
-    const auto h = static_cast<std::size_t>(perm[i]);  // history row of particle i (pre-sort)
-    for (int e = hStart[h]; e < hStart[h + 1]; ++e)
-      if (hId[static_cast<std::size_t>(e)] == partner) {
-        shear.insert(shear.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
-        return;
-      }
+  const auto lookup = [&](std::size_t a, int b) {
+    // the history of (a, b) as seen from a: from a's rows (key: b's id, or the wall code), else
+    // from b's rows, negated (rows are in pre-sort order: row perm[i] for particle i)
+    if (a < n) {
+      const auto h = static_cast<std::size_t>(perm[a]);
+      const std::int64_t key = b >= 0 ? p.id[static_cast<std::size_t>(b)] : b;
+      for (int e = hStart[h]; e < hStart[h + 1]; ++e)
+        if (hId[static_cast<std::size_t>(e)] == key) {
+          shear.insert(shear.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
+          return;
+        }
+    }
+    if (b >= 0 && static_cast<std::size_t>(b) < n) {
+      const auto h = static_cast<std::size_t>(perm[static_cast<std::size_t>(b)]);
+      for (int e = hStart[h]; e < hStart[h + 1]; ++e)
+        if (hId[static_cast<std::size_t>(e)] == p.id[a]) {
+          for (int k = 0; k < 3; ++k) shear.push_back(-hS[3 * static_cast<std::size_t>(e) + k]);
+          return;
+        }
+    }
     shear.insert(shear.end(), 3, 0.0);
   };
-  for (std::size_t i = 0; i < n; ++i) {
-    rowStart[i] = static_cast<int>(nbr.size());
+  for (std::size_t q = 0; q < nAll; ++q) {
+    rowStart[q] = static_cast<int>(nbr.size());
     ensure(nbr, nbr.size() + 64);
     ensure(shear, shear.size() + 3 * 64);
-    const int bi = binOf[i];
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const auto b = static_cast<std::size_t>(bi + dx + dy * sy + dz * sz);
-          for (int q = binStart[b]; q < binStart[b + 1]; ++q) {
-            const int j = binItems[static_cast<std::size_t>(q)];
-            if (static_cast<std::size_t>(j) == i) continue;
-            const auto u = static_cast<std::size_t>(j);
-            const double ex = X[i] - X[u], ey = Y[i] - Y[u], ez = Z[i] - Z[u];
-            const double cut = R[i] + R[u] + skin;
-            if (ex * ex + ey * ey + ez * ez < cut * cut) {
-              nbr.push_back(j);
-              lookup(i, p.id[u]);
-            }
-          }
+    const auto a = static_cast<std::size_t>(binItems[q]);
+    const bool ownA = a < n;
+    const int ba = binOf[a];
+    const int bx = ba % nbx[0], by = (ba / nbx[0]) % nbx[1], bz = ba / sz;
+    const auto visit = [&](int from, int to) {
+      for (int t = from; t < to; ++t) {
+        const int j = binItems[static_cast<std::size_t>(t)];
+        const auto u = static_cast<std::size_t>(j);
+        if (!ownA && u >= n) continue;
+        const double ex = X[a] - X[u], ey = Y[a] - Y[u], ez = Z[a] - Z[u];
+        const double cut = R[a] + R[u] + skin;
+        if (ex * ex + ey * ey + ez * ez < cut * cut) {
+          nbr.push_back(j);
+          lookup(a, j);
         }
+      }
+    };
+    visit(static_cast<int>(q) + 1, binStart[static_cast<std::size_t>(ba) + 1]);
+    for (int f = 0; f < nf; ++f) {
+      const int cx = bx + fwd[f][0], cy = by + fwd[f][1], cz = bz + fwd[f][2];
+      if (cx < 0 || cx >= nbx[0] || cy < 0 || cy >= nbx[1] || cz >= nbx[2]) continue;
+      const auto b = static_cast<std::size_t>(cx + cy * sy + cz * sz);
+      visit(binStart[b], binStart[b + 1]);
+    }
+    if (!ownA) continue;
     for (int d = 0; d < 3; ++d)
       for (int s = 0; s < 2; ++s) {
         if (!wallOn[d][static_cast<std::size_t>(s)]) continue;
-        const double dist = s == 0 ? p.x[d][i] - origin[d] : origin[d] + L[d] - p.x[d][i];
-        if (dist < R[i] + skin) {
+        const double dist = s == 0 ? p.x[d][a] - origin[d] : origin[d] + L[d] - p.x[d][a];
+        if (dist < R[a] + skin) {
           const int code = -1 - (2 * d + s);
           nbr.push_back(code);
-          lookup(i, code);
+          lookup(a, code);
         }
       }
   }
-  rowStart[n] = static_cast<int>(nbr.size());
+  rowStart[nAll] = static_cast<int>(nbr.size());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -966,29 +1051,55 @@ void DemSolver::Impl::computeForces(bool update) {
     forces<Model::Linear>(update);
 }
 
+// Each pair is computed once (Newton's third law inside the rank; an owned-ghost pair is
+// computed by each rank for its own particle, "newton off" across ranks, so nothing goes back to
+// a ghost's owner). Holders are visited in K order (see buildLists), so a particle receives the
+// terms of its lower-K partners (pushed by their rows, in increasing K), then those of its own
+// row (increasing K), then its walls: the same sum in the same order at any rank count, and the
+// pair term itself is computed from the same operands (lower K first) everywhere.
 template <Model M>
 void DemSolver::Impl::forces(bool update) {
-  const std::size_t n = p.nOwned;
+  const std::size_t n = p.nOwned, nAll = p.size();
+  double* FX[3] = {p.f[0].data(), p.f[1].data(), p.f[2].data()};
+  double* TX[3] = {p.torque[0].data(), p.torque[1].data(), p.torque[2].data()};
+  for (int k = 0; k < 3; ++k) {
+    const double* fe = p.fExt[k].data();
+    const double* ms = p.mass.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      FX[k][i] = ms[i] * g[k] + fe[i];
+      TX[k][i] = 0;
+    }
+  }
   const double* X[3] = {p.x[0].data(), p.x[1].data(), p.x[2].data()};
   const double* V[3] = {p.v[0].data(), p.v[1].data(), p.v[2].data()};
   const double* W[3] = {p.omega[0].data(), p.omega[1].data(), p.omega[2].data()};
   const double* R = p.radius.data();
   const double* Ms = p.mass.data();
   const int* mat = p.material.data();
+  const int* nb = nbr.data();
+  double* shp = shear.data();
   long long nc = 0, nw = 0;
   double worst = 0;
   std::int64_t worstId = -1, worstPartner = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const int e0 = rowStart[q], e1 = rowStart[q + 1];
+    if (e0 == e1) continue;
+    const auto i = static_cast<std::size_t>(binItems[q]);
+    const bool ownI = i < n;
     const double ri = R[i], mi = Ms[i];
-    double F[3] = {mi * g[0] + p.fExt[0][i], mi * g[1] + p.fExt[1][i], mi * g[2] + p.fExt[2][i]};
-    double T[3] = {0, 0, 0};
+    double F[3] = {0, 0, 0}, T[3] = {0, 0, 0};
+    if (ownI)
+      for (int k = 0; k < 3; ++k) {
+        F[k] = FX[k][i];
+        T[k] = TX[k][i];
+      }
     const double xi[3] = {X[0][i], X[1][i], X[2][i]};
     const double vi[3] = {V[0][i], V[1][i], V[2][i]};
     const double wi[3] = {W[0][i], W[1][i], W[2][i]};
     const PairCoeff* rowC = &pairC[static_cast<std::size_t>(mat[i] * nMat)];
-    for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
-      const int j = nbr[static_cast<std::size_t>(e)];
-      double* sh = &shear[3 * static_cast<std::size_t>(e)];
+    for (int e = e0; e < e1; ++e) {
+      const int j = nb[e];
+      double* sh = shp + 3 * static_cast<std::size_t>(e);
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
         const double dx[3] = {xi[0] - X[0][u], xi[1] - X[1][u], xi[2] - X[2][u]};
@@ -1009,11 +1120,27 @@ void DemSolver::Impl::forces(bool update) {
         const double ws[3] = {ri * wi[0] + rj * W[0][u], ri * wi[1] + rj * W[1][u],
                               ri * wi[2] + rj * W[2][u]};
         const double wr[3] = {wi[0] - W[0][u], wi[1] - W[1][u], wi[2] - W[2][u]};
-        detail::contactForce<M>(rowC[mat[u]], dt, update, nrm, delta, Reff, meff, ri, vr, ws, wr,
-                                sh, F, T);
-        ++nc;
+        double Fp[3], c[3], rl[3];
+        detail::pairForce<M>(rowC[mat[u]], dt, update, nrm, delta, Reff, meff, vr, ws, wr, sh, Fp,
+                             c, rl);
+        if (ownI) {
+          for (int k = 0; k < 3; ++k) {
+            F[k] += Fp[k];
+            T[k] -= ri * c[k];
+            T[k] -= rl[k];
+          }
+          ++nc;
+        }
+        if (u < n) {
+          for (int k = 0; k < 3; ++k) {
+            FX[k][u] -= Fp[k];
+            TX[k][u] -= rj * c[k];
+            TX[k][u] += rl[k];
+          }
+          ++nc;
+        }
         const double ov = delta / std::min(ri, rj);
-        if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = p.id[u];
+        if (ov > worst) worst = ov, worstId = p.id[ownI ? i : u], worstPartner = p.id[ownI ? u : i];
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
         const double dist = s == 0 ? xi[d] - origin[d] : origin[d] + L[d] - xi[d];
@@ -1032,10 +1159,11 @@ void DemSolver::Impl::forces(bool update) {
         if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = -1;
       }
     }
-    for (int k = 0; k < 3; ++k) {
-      p.f[k][i] = F[k];
-      p.torque[k][i] = T[k];
-    }
+    if (ownI)
+      for (int k = 0; k < 3; ++k) {
+        FX[k][i] = F[k];
+        TX[k][i] = T[k];
+      }
   }
   contacts = nc;
   wallContacts = nw;
@@ -1254,17 +1382,30 @@ DemState DemSolver::Impl::save() {
     cp(p.torque[k], q.torque[k]);
     cp(p.fExt[k], q.fExt[k]);
   }
-  for (std::size_t i = 0; i < n; ++i)
-    for (int e = rowStart[i]; e < rowStart[i + 1]; ++e) {
+  // every touching history under each owned particle of the pair (a restart on other ranks may
+  // separate them), as seen from that particle
+  for (std::size_t q = 0; q < p.size(); ++q) {
+    const auto a = static_cast<std::size_t>(binItems[q]);
+    for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
       const double* sh = &shear[3 * static_cast<std::size_t>(e)];
       if (sh[0] == 0 && sh[1] == 0 && sh[2] == 0) continue;
       const int j = nbr[static_cast<std::size_t>(e)];
-      ContactHistory c;
-      c.holder = p.id[i];
-      c.partner = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
-      c.shear = {sh[0], sh[1], sh[2]};
-      st.contacts.push_back(c);
+      if (a < n) {
+        ContactHistory c;
+        c.holder = p.id[a];
+        c.partner = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+        c.shear = {sh[0], sh[1], sh[2]};
+        st.contacts.push_back(c);
+      }
+      if (j >= 0 && static_cast<std::size_t>(j) < n) {
+        ContactHistory c;
+        c.holder = p.id[static_cast<std::size_t>(j)];
+        c.partner = p.id[a];
+        c.shear = {-sh[0], -sh[1], -sh[2]};
+        st.contacts.push_back(c);
+      }
     }
+  }
   return st;
 }
 
@@ -1332,9 +1473,11 @@ long long DemSolver::localWallContacts() const {
 double DemSolver::contactEnergy() const {
   const auto& m = *impl_;
   const auto& p = m.p;
+  const std::size_t n = p.nOwned;
   double e = 0;
-  for (std::size_t i = 0; i < p.nOwned; ++i) {
-    for (int k = m.rowStart[i]; k < m.rowStart[i + 1]; ++k) {
+  for (std::size_t q = 0; q < p.size(); ++q) {
+    const auto i = static_cast<std::size_t>(m.binItems[q]);
+    for (int k = m.rowStart[q]; k < m.rowStart[q + 1]; ++k) {
       const int j = m.nbr[static_cast<std::size_t>(k)];
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
@@ -1342,8 +1485,10 @@ double DemSolver::contactEnergy() const {
         for (int d = 0; d < 3; ++d) r2 += (p.x[d][i] - p.x[d][u]) * (p.x[d][i] - p.x[d][u]);
         const double rs = p.radius[i] + p.radius[u];
         if (r2 >= rs * rs) continue;
+        // half of the pair's energy to each owned particle of the pair
+        const double share = 0.5 * ((i < n ? 1 : 0) + (u < n ? 1 : 0));
         const auto& c = m.pairC[static_cast<std::size_t>(p.material[i] * m.nMat + p.material[u])];
-        e += 0.5 *
+        e += share *
              detail::normalEnergy(m.model, c, rs - std::sqrt(r2), p.radius[i] * p.radius[u] / rs);
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
