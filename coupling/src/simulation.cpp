@@ -546,13 +546,18 @@ void Simulation::sampleFluidForForces() {
 void Simulation::applyCouplingForces(double dt) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
   const std::size_t n = stencils_.count();
+  // Co-located, the force goes straight into the DEM's external-force array of the same rank:
+  // the hand-over is that store (no copy). Independent, it waits in forceAt_ for the message.
+  std::array<double*, 3> out{};
+  for (int d = 0; d < 3; ++d)
+    out[d] = demDec_ ? forceAt_[d].data() : dem_->particles().fExt[d].data();
   // sums: particle drag impulse (3), fluid drag momentum change (3), gross magnitude of the
   // exchanged terms sum beta' (|u| + |v~|) dt (3): the scale of round-off in the balance.
   double sums[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   for (std::size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) {
       const double drag = beta_[i] * (uAt_[d][i] - vDep_[d][i]);
-      forceAt_[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];  // in place of grad p
+      out[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
       sums[d] += drag * dt;
       sums[6 + d] += beta_[i] * (std::abs(uAt_[d][i]) + std::abs(vDep_[d][i])) * dt;
     }
@@ -578,9 +583,9 @@ void Simulation::applyCouplingForces(double dt) {
 void Simulation::handForcesToParticles() {
   auto& p = dem_->particles();
   if (!demDec_) {
-    ScopedPhase t(timers_, Phase::ExchangeLocal);
+    // Co-located: applyCouplingForces() stored the forces in the DEM's own array; what crossed
+    // from one physics to the other is those bytes, in memory, with no copy and no message.
     const std::size_t n = stencils_.count();
-    for (int d = 0; d < 3; ++d) std::copy_n(forceAt_[d].data(), n, p.fExt[d].data());
     timers_.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n * sizeof(double)), 0);
     return;
   }

@@ -14,7 +14,8 @@
 //   refreshCellVelocity()        cell-centred u^{n+1} (and grad p^{n+1})    (fluid)
 //   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (coupling)
 //   applyCouplingForces()        F = beta (u - v) - V_p rho_f grad p         (coupling)
-//   handForcesToParticles()      forces -> the DEM's external force array    (inter-physics, local)
+//   handForcesToParticles()      forces -> the DEM's external force array    (inter-physics, local:
+//                                co-located, the force kernel stores into that array directly)
 //   advanceParticles()           n_sub DEM sub-steps                         (particles)
 //
 // Partition strategies (partition.strategy):
@@ -187,8 +188,9 @@ class Simulation {
   Stencils stencils_;
 
   // Per-particle buffers (the particles of the view; grow-only): 15 doubles and a compact
-  // stencil a particle. applyCouplingForces() replaces the sampled grad p by the coupling force
-  // in place (forceAt_ names the same storage), which handForcesToParticles() hands over.
+  // stencil a particle. Co-located, applyCouplingForces() writes the coupling force into the
+  // DEM's fExt directly; independent, it replaces the sampled grad p in place (forceAt_ names
+  // the same storage) and handForcesToParticles() sends it back to the DEM ranks.
   ParticleView view_;
   ProxyExchange proxy_;
   std::vector<double> volume_, beta_, epsAt_;
