@@ -14,16 +14,37 @@ double threadCpuSeconds() {
 void Timers::start(Phase p) {
   auto& s = slots_[idx(p)];
   if (s.depth++ > 0) return;
-  s.wall0 = MPI_Wtime();
-  s.cpu0 = threadCpuSeconds();
+  const double wall = MPI_Wtime(), cpu = threadCpuSeconds();
+  if (nActive_ > 0) {  // pause the enclosing phase
+    auto& outer = slots_[idx(active_[static_cast<std::size_t>(nActive_ - 1)])];
+    outer.wall += wall - outer.wall0;
+    outer.cpu += cpu - outer.cpu0;
+  }
+  if (nActive_ < static_cast<int>(active_.size())) active_[static_cast<std::size_t>(nActive_++)] = p;
+  s.wall0 = wall;
+  s.cpu0 = cpu;
 }
 
 void Timers::stop(Phase p) {
   auto& s = slots_[idx(p)];
   if (--s.depth > 0) return;
-  s.wall += MPI_Wtime() - s.wall0;
-  s.cpu += threadCpuSeconds() - s.cpu0;
+  const double wall = MPI_Wtime(), cpu = threadCpuSeconds();
+  s.wall += wall - s.wall0;
+  s.cpu += cpu - s.cpu0;
   ++s.calls;
+  // Remove p from the running phases (normally the innermost) and resume the enclosing one.
+  for (int i = nActive_ - 1; i >= 0; --i) {
+    if (active_[static_cast<std::size_t>(i)] != p) continue;
+    for (int j = i; j + 1 < nActive_; ++j)
+      active_[static_cast<std::size_t>(j)] = active_[static_cast<std::size_t>(j + 1)];
+    --nActive_;
+    break;
+  }
+  if (nActive_ > 0) {
+    auto& outer = slots_[idx(active_[static_cast<std::size_t>(nActive_ - 1)])];
+    outer.wall0 = wall;
+    outer.cpu0 = cpu;
+  }
 }
 
 void Timers::book(Exchange kind, long long bytes, long long messages, double seconds) {
@@ -43,6 +64,7 @@ void Timers::beginRun() {
 void Timers::reset() {
   slots_ = {};
   ledger_ = {};
+  nActive_ = 0;
 }
 
 Json Timers::report(const Comm& comm, double stepWallSeconds) const {

@@ -61,3 +61,34 @@ TEST(Timers, NestedStartsOfOnePhaseCountOnce) {
   EXPECT_LT(t.seconds(coloc::Phase::Setup), 0.015 + 0.5);
   EXPECT_GE(t.seconds(coloc::Phase::Setup), 0.01);
 }
+
+namespace {
+void spin(double seconds) {
+  const double t0 = MPI_Wtime();
+  while (MPI_Wtime() - t0 < seconds) {
+  }
+}
+}  // namespace
+
+TEST(Timers, APhaseInsideAnotherPausesIt) {
+  // Exclusive nesting: every moment belongs to one phase, so the phases add up to the wall time.
+  coloc::Timers t;
+  const double t0 = MPI_Wtime();
+  t.start(coloc::Phase::ExchangeRemote);
+  spin(0.01);
+  t.start(coloc::Phase::CouplingDeposit);
+  spin(0.03);
+  t.stop(coloc::Phase::CouplingDeposit);
+  spin(0.01);
+  t.stop(coloc::Phase::ExchangeRemote);
+  const double total = MPI_Wtime() - t0;
+  const double outer = t.seconds(coloc::Phase::ExchangeRemote);
+  const double inner = t.seconds(coloc::Phase::CouplingDeposit);
+  EXPECT_GE(inner, 0.03);
+  EXPECT_GE(outer, 0.02);
+  // The inner 30 ms are not booked twice: booked to both, the sum would exceed the wall time by
+  // the inner time (the spins are by wall clock, so this holds however the machine is loaded).
+  EXPECT_NEAR(outer + inner, total, 1e-3);
+  EXPECT_EQ(t.calls(coloc::Phase::ExchangeRemote), 1);
+  EXPECT_EQ(t.calls(coloc::Phase::CouplingDeposit), 1);
+}

@@ -83,6 +83,8 @@ inline constexpr std::array<std::string_view, 3> kExchangeNames = {
 
 double threadCpuSeconds();
 
+/// Phases nest exclusively: starting a phase inside another pauses the outer one until the inner
+/// one stops, so every moment is booked to exactly one phase and the fractions add up.
 class Timers {
  public:
   void start(Phase p);
@@ -119,6 +121,8 @@ class Timers {
   const Slot& slot(Phase p) const { return slots_[idx(p)]; }
   std::array<Slot, static_cast<std::size_t>(Phase::Count)> slots_{};
   std::array<Ledger, static_cast<std::size_t>(Exchange::Count)> ledger_{};
+  std::array<Phase, 16> active_{};  // the running phases, innermost last
+  int nActive_ = 0;
 };
 
 /// RAII phase timer: `ScopedPhase t(timers, Phase::DemForce);`

@@ -7,7 +7,8 @@
 //               its owned values, then the ghosts are zeroed; used for deposition. At a
 //               non-periodic box face, Fold::Mirror adds ghost layer -1-m onto owned layer m
 //               (contributions of a kernel that pokes through a wall stay in the domain), Keep
-//               leaves them in the ghosts.
+//               leaves them in the ghosts. With timers, the fold is booked to the
+//               coupling_deposit phase (arithmetic inside the block, not an exchange).
 // Buffers are allocated on first use for the largest field count seen and never again.
 // Every message is booked in the Timers ledger under the exchange kind the caller names.
 #pragma once
