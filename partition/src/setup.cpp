@@ -22,6 +22,14 @@ void declareDomainConfig(Schema& s) {
             "balanced: measure the two costs over this many steps on uniform blocks first "
             "(0: use partition.cost.*)",
             Range::nonNegative());
+  s.integer("partition.rebalance_interval", 0,
+            "balanced: every this many steps, place the cuts anew for the particles as they are "
+            "(weights from the run's own phase timers) and move cells and particles together "
+            "when it pays (0: never)",
+            Range::nonNegative());
+  s.number("partition.rebalance_threshold", 1.05,
+           "balanced: re-balance only when the modelled largest block cost drops by this factor",
+           Range::atLeast(1.0));
   s.intVec3("partition.dem_dims", std::array<long long, 3>{0, 0, 0},
             "independent: the DEM's process grid (0: balanced by particle count on a grid other "
             "than the fluid's)",

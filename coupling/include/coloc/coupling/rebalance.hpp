@@ -1,0 +1,35 @@
+// coloc/coupling/rebalance.hpp — re-balancing the co-located blocks during a run (issue 7).
+//
+// Every partition.rebalance_interval steps of a balanced run, the cuts are placed anew for the
+// particles where they are now, with the cost weights measured by the run itself (busy seconds of
+// the fluid phases per cell and of the particle and coupling phases per particle, summed over
+// ranks: only their ratio places the cuts). When the modelled largest block cost drops by
+// partition.rebalance_threshold or more, the state goes to a checkpoint and the simulation is
+// built anew on the new blocks from it: cells and particles move together (a cell and the
+// particles in it land on the same rank, co-location holds by construction), contact histories
+// travel with their particles, and the continuation equals the run without re-balancing to
+// round-off (the summation order of a few sums changes with the blocks).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "coloc/coupling/simulation.hpp"
+
+namespace coloc::coupling {
+
+struct RebalancePlan {
+  std::optional<Layouts> layouts;  // the new blocks; set only when re-balancing pays
+  CostModel model;                 // the measured weights
+  double currentImbalance = 1.0;   // modelled max/avg block cost of the blocks in use
+  double newImbalance = 1.0;       // the same for the new blocks
+  double gain = 1.0;               // current / new modelled largest block cost
+};
+
+/// Whether the case asks for a re-balance after `steps` steps (balanced runs only).
+bool rebalanceDue(const Config& cfg, long long steps);
+/// The new blocks for the particles as they are now. Collective.
+RebalancePlan planRebalance(Simulation& sim, const Config& cfg);
+
+}  // namespace coloc::coupling
