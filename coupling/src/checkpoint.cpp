@@ -128,8 +128,7 @@ CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const
     throw Error(where + "its grid has " + std::to_string(info.grid.cells[0]) + "x" +
                 std::to_string(info.grid.cells[1]) + "x" + std::to_string(info.grid.cells[2]) +
                 " cells, the case " + std::to_string(g.cells[0]) + "x" +
-                std::to_string(g.cells[1]) + "x" + std::to_string(g.cells[2]) +
-                " (domain.cells)");
+                std::to_string(g.cells[1]) + "x" + std::to_string(g.cells[2]) + " (domain.cells)");
   for (int d = 0; d < 3; ++d) {
     const double tol = 1e-12 * std::max(1.0, std::fabs(g.length[d]));
     if (std::fabs(info.grid.origin[d] - g.origin[d]) > tol ||
@@ -162,16 +161,23 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
   writeCellField(file, group + "/K", dec, f.K);
   writeCellVector(file, group + "/KUp", dec, f.KUp[0], f.KUp[1], f.KUp[2]);
   const fv::FluidCounters c = fluid.counters();
-  const std::pair<const char*, double> dbl[] = {
-      {"time", c.time},       {"dt_old", c.dtOld},
-      {"dt_last", c.dtLast},  {"cfl_last", c.cflLast},
-      {"max_rate", c.maxRate}, {"steady_residual", c.steadyResidual},
-      {"residual_last", c.resLast}, {"rhs_scale_last", c.rhsScaleLast}};
+  const std::pair<const char*, double> dbl[] = {{"time", c.time},
+                                                {"dt_old", c.dtOld},
+                                                {"dt_last", c.dtLast},
+                                                {"cfl_last", c.cflLast},
+                                                {"max_rate", c.maxRate},
+                                                {"steady_residual", c.steadyResidual},
+                                                {"residual_last", c.resLast},
+                                                {"rhs_scale_last", c.rhsScaleLast}};
   for (const auto& [k, v] : dbl) file.setAttribute(group, k, v);
-  const std::pair<const char*, long long> ints[] = {
-      {"steps", c.steps},    {"iterations_sum", c.itSum}, {"solves", c.solves},
-      {"setups", c.setups},  {"iterations_max", c.itMax}, {"iterations_last", c.itLast},
-      {"have_old", c.haveOld ? 1 : 0}, {"rates_stale", c.ratesStale ? 1 : 0}};
+  const std::pair<const char*, long long> ints[] = {{"steps", c.steps},
+                                                    {"iterations_sum", c.itSum},
+                                                    {"solves", c.solves},
+                                                    {"setups", c.setups},
+                                                    {"iterations_max", c.itMax},
+                                                    {"iterations_last", c.itLast},
+                                                    {"have_old", c.haveOld ? 1 : 0},
+                                                    {"rates_stale", c.ratesStale ? 1 : 0}};
   for (const auto& [k, v] : ints) file.setAttribute(group, k, v);
 }
 

@@ -64,7 +64,7 @@ struct FluidSolver::Impl {
   double maxRate = 0;  // max over cells of sum_d |u_d|/h_d (1/s), after the last step
   double cflLast = 0, dtLast = 0, steadyResidual = std::numeric_limits<double>::infinity();
   double scale2 = 0, rhsScaleLast = 0;
-  long long setupsOffset = 0;  // pressure-matrix setups before a restore
+  long long setupsOffset = 0;                       // pressure-matrix setups before a restore
   double inLocal = 0, outLocal = 0, dVolLocal = 0;  // last step, this rank
   Real3 dragLocal{0, 0, 0};
 

@@ -54,8 +54,7 @@ std::string CheckpointOptions::pathAt(long long step) const {
 std::string failedCheckpointPath(const std::string& path) {
   std::filesystem::path p(path);
   const std::string ext = p.extension().string();
-  return (p.parent_path() / (p.stem().string() + ".failed" + (ext.empty() ? ".h5" : ext)))
-      .string();
+  return (p.parent_path() / (p.stem().string() + ".failed" + (ext.empty() ? ".h5" : ext))).string();
 }
 
 OutputOptions outputOptionsFromConfig(const Config& cfg, const std::string& runOutDir) {

@@ -59,7 +59,7 @@ void setCoefficients(const Decomposition& dec, fv::FluidSolver& s, int k) {
     const double y = g.origin[1] + (dec.lo()[1] + j + 0.5) * g.spacing(1);
     const double z = g.origin[2] + (dec.lo()[2] + kk + 0.5) * g.spacing(2);
     f.eps(i, j, kk) = 1.0 - 0.3 * std::exp(-20 * ((x - 0.5 - 0.02 * k) * (x - 0.5 - 0.02 * k) +
-                                                 (y - 0.3) * (y - 0.3) + (z - 0.2) * (z - 0.2)));
+                                                  (y - 0.3) * (y - 0.3) + (z - 0.2) * (z - 0.2)));
     f.K(i, j, kk) = 5.0 * (1.0 - f.eps(i, j, kk));
     f.KUp[0](i, j, kk) = 0.1 * f.K(i, j, kk);
     f.KUp[1](i, j, kk) = 0.0;
@@ -144,6 +144,8 @@ TEST(CheckpointFluid, RestoreContinuesBitwiseAndOnOtherBlocks) {
   for (std::size_t i = 0; i < ref.size(); ++i)
     ASSERT_LE(std::fabs(oth[i] - ref[i]), 1e-10 * scale) << "entry " << i;
   EXPECT_NEAR(c.time(), a.time(), 1e-12 * a.time());
+  world.barrier();
+  if (world.isRoot()) fs::remove_all(fs::path(path).parent_path());
 }
 
 TEST(CheckpointFluid, BadFilesGiveAnErrorOnEveryRank) {
@@ -170,9 +172,10 @@ TEST(CheckpointFluid, BadFilesGiveAnErrorOnEveryRank) {
     coupling::readCheckpointInfo(world, dir + "/plain.h5");
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("not a coloc checkpoint"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a coloc checkpoint"), std::string::npos) << e.what();
   }
+  world.barrier();
+  if (world.isRoot()) fs::remove_all(dir);
 }
 
 }  // namespace
