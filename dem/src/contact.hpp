@@ -141,7 +141,7 @@ inline double contactForce(const PairCoeff& c, double dt, bool update, const dou
 /// results are returned instead of accumulated, so that each side adds them in its own canonical
 /// order:  force on i: +Fp, on j: -Fp;  torque on i: -r_i nxft - roll, on j: -r_j nxft + roll
 /// (nxft = n x F_t, roll = the rolling-resistance torque on i, zero when mu_r = 0).
-template <Model M>
+template <Model M, bool Rolling = true>
 inline void pairForce(const PairCoeff& c, double dt, bool update, const double* n, double delta,
                       double Reff, double meff, const double* vr, const double* wsum,
                       const double* wrel, double* shear, double* Fp, double* nxft, double* roll) {
@@ -182,6 +182,7 @@ inline void pairForce(const PairCoeff& c, double dt, bool update, const double* 
   }
   for (int k = 0; k < 3; ++k) Fp[k] = Fn * n[k] + Ft[k];
   cross3(n, Ft, nxft);
+  if constexpr (!Rolling) return;
   roll[0] = roll[1] = roll[2] = 0;
   if (c.muR > 0) {
     const double w = std::sqrt(dot3(wrel, wrel));

@@ -121,8 +121,6 @@ struct DemSolver::Impl {
 
   // scratch (grow-only)
   std::vector<int> perm, iscr;
-  std::vector<double> dscr;
-  std::vector<std::int64_t> lscr;
 
   // diagnostics
   long long rebuilds = 0, steps = 0, contacts = 0, wallContacts = 0;
@@ -164,8 +162,9 @@ struct DemSolver::Impl {
   void updateGhosts();
   void buildLists();
   void computeForces(bool update);
-  template <Model M>
+  template <Model M, bool Rolling>
   void forces(bool update);
+  bool rolling = false;  // any material pair with rolling resistance
   void exchange(int d, int tagBase, bool sizesKnown);
   void resizeAll(std::size_t n);
   std::size_t memory() const;
@@ -192,6 +191,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   dtFraction = cfg.number("particles.dt_fraction");
   hStart.assign(1, 0);
   readMaterials(cfg);
+  for (const auto& m : mats) rolling = rolling || m.rollingFriction > 0;
 
   const auto info = detail::inspectSources(cfg, grid, nMat);
   double rmax = 0;
@@ -799,23 +799,37 @@ void DemSolver::Impl::sortByBin() {
         return p.id[static_cast<std::size_t>(u)] < p.id[static_cast<std::size_t>(v)];
       });
   }
-  const auto apply = [&](auto& vec, auto& scratch) {
-    ensure(scratch, n);
-    scratch.resize(n);
-    for (std::size_t k = 0; k < n; ++k) scratch[k] = vec[static_cast<std::size_t>(perm[k])];
-    std::swap(vec, scratch);
+  // applied in place, cycle by cycle (no scratch array: 16 bytes per particle less); a visited
+  // position is marked by complementing its perm entry, restored after each array
+  const auto apply = [&](auto& vec) {
+    for (std::size_t s = 0; s < n; ++s) {
+      if (perm[s] < 0) continue;
+      auto tmp = vec[s];
+      std::size_t k = s;
+      for (;;) {
+        const auto src = static_cast<std::size_t>(perm[k]);
+        perm[k] = ~perm[k];
+        if (src == s) {
+          vec[k] = tmp;
+          break;
+        }
+        vec[k] = vec[src];
+        k = src;
+      }
+    }
+    for (std::size_t k = 0; k < n; ++k) perm[k] = ~perm[k];
   };
-  apply(p.id, lscr);
-  apply(p.material, iscr);
-  apply(p.radius, dscr);
-  apply(p.mass, dscr);
+  apply(p.id);
+  apply(p.material);
+  apply(p.radius);
+  apply(p.mass);
   for (int d = 0; d < 3; ++d) {
-    apply(p.x[d], dscr);
-    apply(p.v[d], dscr);
-    apply(p.omega[d], dscr);
-    apply(p.f[d], dscr);
-    apply(p.torque[d], dscr);
-    apply(p.fExt[d], dscr);
+    apply(p.x[d]);
+    apply(p.v[d]);
+    apply(p.omega[d]);
+    apply(p.f[d]);
+    apply(p.torque[d]);
+    apply(p.fExt[d]);
   }
   // the history rows stay in pre-sort order: buildLists reads row perm[k] for particle k
   for (int d = 0; d < 3; ++d) ensure(x0[d], n);
@@ -1046,9 +1060,10 @@ void DemSolver::Impl::buildLists() {
 
 void DemSolver::Impl::computeForces(bool update) {
   if (model == Model::HertzMindlin)
-    forces<Model::HertzMindlin>(update);
+    rolling ? forces<Model::HertzMindlin, true>(update)
+            : forces<Model::HertzMindlin, false>(update);
   else
-    forces<Model::Linear>(update);
+    rolling ? forces<Model::Linear, true>(update) : forces<Model::Linear, false>(update);
 }
 
 // Each pair is computed once (Newton's third law inside the rank; an owned-ghost pair is
@@ -1057,7 +1072,7 @@ void DemSolver::Impl::computeForces(bool update) {
 // terms of its lower-K partners (pushed by their rows, in increasing K), then those of its own
 // row (increasing K), then its walls: the same sum in the same order at any rank count, and the
 // pair term itself is computed from the same operands (lower K first) everywhere.
-template <Model M>
+template <Model M, bool Rolling>
 void DemSolver::Impl::forces(bool update) {
   const std::size_t n = p.nOwned, nAll = p.size();
   double* FX[3] = {p.f[0].data(), p.f[1].data(), p.f[2].data()};
@@ -1109,25 +1124,28 @@ void DemSolver::Impl::forces(bool update) {
           sh[0] = sh[1] = sh[2] = 0;
           continue;
         }
+        // R* and m* with one division, independent of the distance (in parallel with the
+        // square root and 1/r on the critical path)
+        const double mj = Ms[u], msum = mi + mj;
+        const double q0 = 1.0 / (rs * msum);
+        const double Reff = ri * rj * (msum * q0);
+        const double meff = mi * mj * (rs * q0);
         const double r = std::sqrt(r2);
         const double inv = 1.0 / r;
         const double nrm[3] = {dx[0] * inv, dx[1] * inv, dx[2] * inv};
         const double delta = rs - r;
-        const double Reff = ri * rj / rs;
-        const double mj = Ms[u];
-        const double meff = mi * mj / (mi + mj);
         const double vr[3] = {vi[0] - V[0][u], vi[1] - V[1][u], vi[2] - V[2][u]};
         const double ws[3] = {ri * wi[0] + rj * W[0][u], ri * wi[1] + rj * W[1][u],
                               ri * wi[2] + rj * W[2][u]};
         const double wr[3] = {wi[0] - W[0][u], wi[1] - W[1][u], wi[2] - W[2][u]};
         double Fp[3], c[3], rl[3];
-        detail::pairForce<M>(rowC[mat[u]], dt, update, nrm, delta, Reff, meff, vr, ws, wr, sh, Fp,
-                             c, rl);
+        detail::pairForce<M, Rolling>(rowC[mat[u]], dt, update, nrm, delta, Reff, meff, vr, ws, wr,
+                                      sh, Fp, c, rl);
         if (ownI) {
           for (int k = 0; k < 3; ++k) {
             F[k] += Fp[k];
             T[k] -= ri * c[k];
-            T[k] -= rl[k];
+            if constexpr (Rolling) T[k] -= rl[k];
           }
           ++nc;
         }
@@ -1135,7 +1153,7 @@ void DemSolver::Impl::forces(bool update) {
           for (int k = 0; k < 3; ++k) {
             FX[k][u] -= Fp[k];
             TX[k][u] -= rj * c[k];
-            TX[k][u] += rl[k];
+            if constexpr (Rolling) TX[k][u] += rl[k];
           }
           ++nc;
         }
@@ -1182,7 +1200,7 @@ std::size_t DemSolver::Impl::memory() const {
   for (const auto& a : swaps)
     for (const auto& s : a) b += cap(s.send);
   b += cap(sbuf[0]) + cap(sbuf[1]) + cap(rbuf[0]) + cap(rbuf[1]);
-  b += cap(perm) + cap(iscr) + cap(dscr) + cap(lscr);
+  b += cap(perm) + cap(iscr);
   return b;
 }
 
@@ -1341,6 +1359,10 @@ void DemSolver::Impl::restore(DemState& st) {
   //    refreshes the diagnostics (contacts, overlap) and leaves f, torque and histories as saved
   checkTimeStep();
   rebuild(true);
+  // the rows held every history twice (under both particles of a pair); the next rebuild packs
+  // them again at their usual size
+  std::vector<std::int64_t>().swap(hId);
+  std::vector<double>().swap(hS);
   {
     ScopedPhase f(timers, Phase::DemForce);
     std::vector<double> keep;
