@@ -70,7 +70,7 @@ void Timers::reset() {
 Json Timers::report(const Comm& comm, double stepWallSeconds) const {
   Json out = Json::object();
   Json timers = Json::object();
-  std::array<double, 6> catAvg{};
+  std::array<double, static_cast<std::size_t>(Category::Count)> catAvg{};
   double busyComputeLocal = 0;
   for (std::size_t i = 0; i < kPhases.size(); ++i) {
     const auto& s = slots_[i];
@@ -103,7 +103,8 @@ Json Timers::report(const Comm& comm, double stepWallSeconds) const {
       {"dem", catAvg[static_cast<std::size_t>(Category::Particles)] / denom},
       {"coupling", catAvg[static_cast<std::size_t>(Category::Coupling)] / denom},
       {"inter_physics", catAvg[static_cast<std::size_t>(Category::InterPhysics)] / denom},
-      {"output", catAvg[static_cast<std::size_t>(Category::Output)] / denom}};
+      {"output", catAvg[static_cast<std::size_t>(Category::Output)] / denom},
+      {"wait", catAvg[static_cast<std::size_t>(Category::Wait)] / denom}};
   const auto busy = comm.minMaxAvg(busyComputeLocal);
   out["load"] = {{"busy_s_min", busy.min},
                  {"busy_s_avg", busy.avg},

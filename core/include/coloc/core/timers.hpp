@@ -13,7 +13,16 @@
 namespace coloc {
 
 /// What a phase counts towards in `fractions.*`.
-enum class Category : std::uint8_t { Setup, Fluid, Particles, Coupling, InterPhysics, Output };
+enum class Category : std::uint8_t {
+  Setup,
+  Fluid,
+  Particles,
+  Coupling,
+  InterPhysics,
+  Output,
+  Wait,  // waiting for the slowest rank: load imbalance, not data movement
+  Count
+};
 
 enum class Phase : std::uint8_t {
   Setup,
@@ -38,6 +47,7 @@ enum class Phase : std::uint8_t {
   // inter-physics exchange (data movement between the two physics)
   ExchangeLocal,   // inside a rank: gather/scatter between fluid and particle structures
   ExchangeRemote,  // across ranks: reverse halo sum of deposited fields, independent-mode transfers
+  Sync,            // a timed barrier before the first exchange after the DEM sub-steps
   Output,
   Checkpoint,
   Count
@@ -68,6 +78,7 @@ inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> k
     {"coupling_drag", Category::Coupling},
     {"exchange_local", Category::InterPhysics, false},
     {"exchange_remote", Category::InterPhysics, false},
+    {"sync", Category::Wait, false},
     {"output", Category::Output},
     {"checkpoint", Category::Output},
 }};
