@@ -47,6 +47,13 @@ void Timers::stop(Phase p) {
   }
 }
 
+void Timers::add(Phase p, double wallSeconds, double cpuSeconds) {
+  auto& s = slots_[idx(p)];
+  s.wall += wallSeconds;
+  s.cpu += cpuSeconds;
+  ++s.calls;
+}
+
 void Timers::book(Exchange kind, long long bytes, long long messages, double seconds) {
   auto& l = ledger_[idx(kind)];
   l.bytes += bytes;

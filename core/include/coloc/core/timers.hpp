@@ -50,6 +50,7 @@ enum class Phase : std::uint8_t {
   Sync,            // a timed barrier before the first exchange after the DEM sub-steps
   Output,
   Checkpoint,
+  Rebalance,  // moving cells and particles onto new blocks (partition.rebalance_interval)
   Count
 };
 
@@ -81,6 +82,7 @@ inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> k
     {"sync", Category::Wait, false},
     {"output", Category::Output},
     {"checkpoint", Category::Output},
+    {"rebalance", Category::Setup},
 }};
 
 inline constexpr std::string_view phaseName(Phase p) {
@@ -104,6 +106,8 @@ class Timers {
   double seconds(Phase p) const { return slot(p).wall; }
   double busySeconds(Phase p) const { return slot(p).cpu; }
   long long calls(Phase p) const { return slot(p).calls; }
+  /// Adds one interval measured outside start/stop (e.g. across objects' lifetimes).
+  void add(Phase p, double wallSeconds, double cpuSeconds);
   /// Book one exchange: bytes and messages sent by this rank, and its time.
   void book(Exchange kind, long long bytes, long long messages, double seconds = 0.0);
   long long bytes(Exchange kind) const { return ledger_[idx(kind)].bytes; }
