@@ -102,13 +102,37 @@ struct DemSolver::Impl {
 
   // Verlet list (full, owned rows)
   std::vector<int> rowStart, nbr;
-  std::vector<double> shear;
+  std::vector<int> slot;  // per entry: its history in the pool hS (-1: none)
   std::array<std::vector<double>, 3> x0;
 
-  // contact history per particle (between list builds and in migration)
+  // Contact history pool: hS holds 3 doubles per slot. Between builds the slots are used by the
+  // list entries of touching pairs (slot[]), with a free list; from the packing at a rebuild to
+  // the next list build they are rows per owned particle (hStart, key hId), which migration
+  // carries; the list build then takes its entries' slots from the rows (no second pool).
   std::vector<int> hStart;
   std::vector<std::int64_t> hId;
   std::vector<double> hS;
+  std::vector<int> freeSlots;
+  [[gnu::noinline, gnu::cold]] int newSlot() {
+    std::size_t s;
+    if (!freeSlots.empty()) {
+      s = static_cast<std::size_t>(freeSlots.back());
+      freeSlots.pop_back();
+    } else {
+      s = hId.size();
+      ensure(hId, s + 1);
+      hId.push_back(0);
+      ensure(hS, 3 * s + 3);
+      hS.resize(3 * s + 3);
+    }
+    hS[3 * s] = hS[3 * s + 1] = hS[3 * s + 2] = 0;
+    return static_cast<int>(s);
+  }
+  [[gnu::noinline]] void freeSlot(int s) {
+    ensure(freeSlots, freeSlots.size() + 1);
+    freeSlots.push_back(s);
+  }
+  void compactPool();
 
   // ghost plan: send lists per axis and side (0: to the low neighbour, 1: to the high one)
   struct Swap {
@@ -544,12 +568,13 @@ void DemSolver::Impl::rebuild(bool first) {
 }
 
 void DemSolver::Impl::packHistory() {
-  // Rows of the touching histories per owned particle (the format migration carries and the
-  // list build reads), keyed by the partner's global id (walls: -1..-6), shear as seen from the
-  // row's particle. An owned-owned pair has one row, under its list holder, and a second one
-  // under the partner when the two are bound for different ranks or only one of them wraps
-  // across a periodic face (the pair is then computed by each side for its own particle, with
-  // its own copy, as every owned-ghost pair).
+  // The history pool becomes rows per owned particle (the format migration carries and the list
+  // build reads), keyed by the partner's global id (walls: -1..-6), shear as seen from the row's
+  // particle. An owned-ghost pair has one row, under its owned particle; an owned-owned pair one
+  // under its holder, and a second one under the partner when the two are bound for different
+  // ranks or only one of them wraps across a periodic face (the pair is then computed by each
+  // side for its own particle, with its own copy, as every owned-ghost pair). Done in place: the
+  // live pool slots are permuted into row order (no second pool).
   const std::size_t n = p.nOwned, nAll = p.size();
   ensure(iscr, n);
   iscr.resize(n);
@@ -570,48 +595,99 @@ void DemSolver::Impl::packHistory() {
     }
     iscr[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
   }
-  const auto both = [&](std::size_t a, std::size_t j) {
-    return j < n && (a >= n || iscr[a] != iscr[j]);
+  const auto dup = [&](std::size_t a, int j) {
+    return a < n && j >= 0 && static_cast<std::size_t>(j) < n &&
+           iscr[a] != iscr[static_cast<std::size_t>(j)];
   };
+  // pass 1: rows per particle; slots of zero histories are dropped
   ensure(hStart, n + 1);
   hStart.assign(n + 1, 0);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(binItems[q]);
     for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
-      const double* s = &shear[3 * static_cast<std::size_t>(e)];
-      if (s[0] == 0 && s[1] == 0 && s[2] == 0) continue;
+      const int s = slot[static_cast<std::size_t>(e)];
+      if (s < 0) continue;
+      const double* v = &hS[3 * static_cast<std::size_t>(s)];
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0) {
+        slot[static_cast<std::size_t>(e)] = -1;
+        continue;
+      }
       const int j = nbr[static_cast<std::size_t>(e)];
-      if (a < n) ++hStart[a + 1];
-      if (j >= 0 && both(a, static_cast<std::size_t>(j))) ++hStart[static_cast<std::size_t>(j) + 1];
+      ++hStart[(a < n ? a : static_cast<std::size_t>(j)) + 1];
+      if (dup(a, j)) ++hStart[static_cast<std::size_t>(j) + 1];
     }
   }
   for (std::size_t i = 0; i < n; ++i) hStart[i + 1] += hStart[i];
-  const auto total = static_cast<std::size_t>(hStart[n]);
-  ensure(hId, total);
-  hId.resize(total);
-  ensure(hS, 3 * total);
-  hS.resize(3 * total);
-  std::vector<int>& cur = perm;  // free until the re-sort
+  const auto T = static_cast<std::size_t>(hStart[n]);
+  const std::size_t M = std::max(T, hId.size());
+  ensure(hId, M);
+  hId.resize(M);
+  ensure(hS, 3 * M);
+  hS.resize(3 * M);
+  // target position of every pool slot (live ones to their row, the others to the free rows),
+  // kept in hId, which pass 2 overwrites with the keys: bits 0-31 the target, bit 32 "position
+  // taken", bit 33 "moved"
+  constexpr std::int64_t kNone = 0xffffffffLL, kTakenPos = 1LL << 32, kMoved = 1LL << 33;
+  for (std::size_t s = 0; s < M; ++s) hId[s] = kNone;
+  const auto setTarget = [&](std::size_t s, std::size_t pos) {
+    hId[s] = (hId[s] & ~kNone) | static_cast<std::int64_t>(pos);
+    hId[pos] |= kTakenPos;
+  };
+  std::vector<int>& cur = binOf;  // free until the re-sort
   ensure(cur, n);
   cur.assign(hStart.begin(), hStart.end() - 1);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(binItems[q]);
     for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
-      const double* s = &shear[3 * static_cast<std::size_t>(e)];
-      if (s[0] == 0 && s[1] == 0 && s[2] == 0) continue;
+      const int s = slot[static_cast<std::size_t>(e)];
+      if (s < 0) continue;
       const int j = nbr[static_cast<std::size_t>(e)];
+      const int pos = cur[a < n ? a : static_cast<std::size_t>(j)]++;
+      if (dup(a, j)) ++cur[static_cast<std::size_t>(j)];
+      setTarget(static_cast<std::size_t>(s), static_cast<std::size_t>(pos));
+    }
+  }
+  for (std::size_t s = 0, pos = 0; s < M; ++s) {
+    if ((hId[s] & kNone) != kNone) continue;
+    while (hId[pos] & kTakenPos) ++pos;
+    setTarget(s, pos);
+  }
+  for (std::size_t s = 0; s < M; ++s) {  // move slot s to its target, cycle by cycle
+    if (hId[s] & kMoved) continue;
+    double v[3] = {hS[3 * s], hS[3 * s + 1], hS[3 * s + 2]};
+    std::size_t k = s;
+    for (;;) {
+      const auto t = static_cast<std::size_t>(hId[k] & kNone);
+      hId[k] |= kMoved;
+      for (int c = 0; c < 3; ++c) std::swap(v[c], hS[3 * t + static_cast<std::size_t>(c)]);
+      if (t == s) break;
+      k = t;
+    }
+  }
+  // pass 2: keys, orientation, second copies
+  cur.assign(hStart.begin(), hStart.end() - 1);
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const auto a = static_cast<std::size_t>(binItems[q]);
+    for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
+      if (slot[static_cast<std::size_t>(e)] < 0) continue;
+      const int j = nbr[static_cast<std::size_t>(e)];
+      double* v = &hS[3 * static_cast<std::size_t>(cur[a < n ? a : static_cast<std::size_t>(j)])];
       if (a < n) {
-        const auto r = static_cast<std::size_t>(cur[a]++);
-        hId[r] = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
-        for (int k = 0; k < 3; ++k) hS[3 * r + static_cast<std::size_t>(k)] = s[k];
+        hId[static_cast<std::size_t>(cur[a]++)] = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+      } else {  // under the owned partner, seen from it
+        hId[static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++)] = p.id[a];
+        for (int c = 0; c < 3; ++c) v[c] = -v[c];
       }
-      if (j >= 0 && both(a, static_cast<std::size_t>(j))) {
+      if (dup(a, j)) {
         const auto r = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
         hId[r] = p.id[a];
-        for (int k = 0; k < 3; ++k) hS[3 * r + static_cast<std::size_t>(k)] = -s[k];
+        for (int c = 0; c < 3; ++c) hS[3 * r + static_cast<std::size_t>(c)] = -v[c];
       }
     }
   }
+  hId.resize(T);
+  hS.resize(3 * T);
+  freeSlots.clear();
 }
 
 void DemSolver::Impl::exchange(int d, int tagBase, bool sizesKnown) {
@@ -975,7 +1051,7 @@ void DemSolver::Impl::buildLists() {
   ensure(rowStart, nAll + 1);
   rowStart.resize(nAll + 1);
   nbr.clear();
-  shear.clear();
+  slot.clear();
   const int sy = nbx[0], sz = nbx[0] * nbx[1];
   int fwd[13][3], nf = 0;
   for (int dz = 0; dz <= 1; ++dz)
@@ -990,15 +1066,18 @@ void DemSolver::Impl::buildLists() {
   const double* Y = p.x[1].data();
   const double* Z = p.x[2].data();
   const double* R = p.radius.data();
+  // the history of (a, b) as seen from a: the row of a keyed by b's id (or the wall code), else
+  // the row of b keyed by a's id, negated in place; the entry takes that row as its pool slot
+  // (rows are in pre-sort order: row perm[i] for particle i; a taken row's key is cleared)
+  constexpr std::int64_t kTaken = std::numeric_limits<std::int64_t>::min();
   const auto lookup = [&](std::size_t a, int b) {
-    // the history of (a, b) as seen from a: from a's rows (key: b's id, or the wall code), else
-    // from b's rows, negated (rows are in pre-sort order: row perm[i] for particle i)
     if (a < n) {
       const auto h = static_cast<std::size_t>(perm[a]);
       const std::int64_t key = b >= 0 ? p.id[static_cast<std::size_t>(b)] : b;
       for (int e = hStart[h]; e < hStart[h + 1]; ++e)
         if (hId[static_cast<std::size_t>(e)] == key) {
-          shear.insert(shear.end(), hS.begin() + 3 * e, hS.begin() + 3 * e + 3);
+          hId[static_cast<std::size_t>(e)] = kTaken;
+          slot.push_back(e);
           return;
         }
     }
@@ -1006,16 +1085,18 @@ void DemSolver::Impl::buildLists() {
       const auto h = static_cast<std::size_t>(perm[static_cast<std::size_t>(b)]);
       for (int e = hStart[h]; e < hStart[h + 1]; ++e)
         if (hId[static_cast<std::size_t>(e)] == p.id[a]) {
-          for (int k = 0; k < 3; ++k) shear.push_back(-hS[3 * static_cast<std::size_t>(e) + k]);
+          hId[static_cast<std::size_t>(e)] = kTaken;
+          for (int k = 0; k < 3; ++k) hS[3 * static_cast<std::size_t>(e) + k] *= -1.0;
+          slot.push_back(e);
           return;
         }
     }
-    shear.insert(shear.end(), 3, 0.0);
+    slot.push_back(-1);
   };
   for (std::size_t q = 0; q < nAll; ++q) {
     rowStart[q] = static_cast<int>(nbr.size());
     ensure(nbr, nbr.size() + 64);
-    ensure(shear, shear.size() + 3 * 64);
+    ensure(slot, slot.size() + 64);
     const auto a = static_cast<std::size_t>(binItems[q]);
     const bool ownA = a < n;
     const int ba = binOf[a];
@@ -1053,6 +1134,10 @@ void DemSolver::Impl::buildLists() {
       }
   }
   rowStart[nAll] = static_cast<int>(nbr.size());
+  // rows no entry took are free slots
+  freeSlots.clear();
+  for (std::size_t e = 0; e < hId.size(); ++e)
+    if (hId[e] != kTaken) freeSlot(static_cast<int>(e));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1092,7 +1177,7 @@ void DemSolver::Impl::forces(bool update) {
   const double* Ms = p.mass.data();
   const int* mat = p.material.data();
   const int* nb = nbr.data();
-  double* shp = shear.data();
+  int* sl = slot.data();
   long long nc = 0, nw = 0;
   double worst = 0;
   std::int64_t worstId = -1, worstPartner = 0;
@@ -1114,16 +1199,17 @@ void DemSolver::Impl::forces(bool update) {
     const PairCoeff* rowC = &pairC[static_cast<std::size_t>(mat[i] * nMat)];
     for (int e = e0; e < e1; ++e) {
       const int j = nb[e];
-      double* sh = shp + 3 * static_cast<std::size_t>(e);
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
         const double dx[3] = {xi[0] - X[0][u], xi[1] - X[1][u], xi[2] - X[2][u]};
         const double r2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
         const double rj = R[u], rs = ri + rj;
         if (r2 >= rs * rs) {
-          sh[0] = sh[1] = sh[2] = 0;
+          if (sl[e] >= 0) freeSlot(sl[e]), sl[e] = -1;
           continue;
         }
+        if (sl[e] < 0) sl[e] = newSlot();
+        double* sh = &hS[3 * static_cast<std::size_t>(sl[e])];
         // R* and m* with one division, independent of the distance (in parallel with the
         // square root and 1/r on the critical path)
         const double mj = Ms[u], msum = mi + mj;
@@ -1164,9 +1250,11 @@ void DemSolver::Impl::forces(bool update) {
         const double dist = s == 0 ? xi[d] - origin[d] : origin[d] + L[d] - xi[d];
         const double delta = ri - dist;
         if (delta <= 0) {
-          sh[0] = sh[1] = sh[2] = 0;
+          if (sl[e] >= 0) freeSlot(sl[e]), sl[e] = -1;
           continue;
         }
+        if (sl[e] < 0) sl[e] = newSlot();
+        double* sh = &hS[3 * static_cast<std::size_t>(sl[e])];
         double nrm[3] = {0, 0, 0};
         nrm[d] = s == 0 ? 1.0 : -1.0;
         const double ws[3] = {ri * wi[0], ri * wi[1], ri * wi[2]};
@@ -1195,8 +1283,8 @@ std::size_t DemSolver::Impl::memory() const {
   for (int d = 0; d < 3; ++d)
     b += cap(p.x[d]) + cap(p.v[d]) + cap(p.omega[d]) + cap(p.f[d]) + cap(p.torque[d]) +
          cap(p.fExt[d]) + cap(x0[d]);
-  b += cap(binOf) + cap(binStart) + cap(binItems) + cap(rowStart) + cap(nbr) + cap(shear);
-  b += cap(hStart) + cap(hId) + cap(hS);
+  b += cap(binOf) + cap(binStart) + cap(binItems) + cap(rowStart) + cap(nbr) + cap(slot);
+  b += cap(hStart) + cap(hId) + cap(hS) + cap(freeSlots);
   for (const auto& a : swaps)
     for (const auto& s : a) b += cap(s.send);
   b += cap(sbuf[0]) + cap(sbuf[1]) + cap(rbuf[0]) + cap(rbuf[1]);
@@ -1359,10 +1447,7 @@ void DemSolver::Impl::restore(DemState& st) {
   //    refreshes the diagnostics (contacts, overlap) and leaves f, torque and histories as saved
   checkTimeStep();
   rebuild(true);
-  // the rows held every history twice (under both particles of a pair); the next rebuild packs
-  // them again at their usual size
-  std::vector<std::int64_t>().swap(hId);
-  std::vector<double>().swap(hS);
+  compactPool();  // the rows held every history twice (under both particles of a pair)
   {
     ScopedPhase f(timers, Phase::DemForce);
     std::vector<double> keep;
@@ -1377,6 +1462,19 @@ void DemSolver::Impl::restore(DemState& st) {
                   keep.begin() + static_cast<std::ptrdiff_t>(o + n), (*a)[k].begin());
   }
   checkOverlap(comm.max(maxOverlap));
+}
+
+void DemSolver::Impl::compactPool() {
+  std::vector<double> v;
+  v.reserve(3 * (hId.size() - freeSlots.size()) + 16);
+  for (auto& s : slot)
+    if (s >= 0) {
+      v.insert(v.end(), hS.begin() + 3 * s, hS.begin() + 3 * s + 3);
+      s = static_cast<int>(v.size() / 3 - 1);
+    }
+  hS.swap(v);
+  std::vector<std::int64_t>(hS.size() / 3, 0).swap(hId);
+  std::vector<int>().swap(freeSlots);
 }
 
 DemState DemSolver::Impl::save() {
@@ -1409,7 +1507,9 @@ DemState DemSolver::Impl::save() {
   for (std::size_t q = 0; q < p.size(); ++q) {
     const auto a = static_cast<std::size_t>(binItems[q]);
     for (int e = rowStart[q]; e < rowStart[q + 1]; ++e) {
-      const double* sh = &shear[3 * static_cast<std::size_t>(e)];
+      const int sl = slot[static_cast<std::size_t>(e)];
+      if (sl < 0) continue;
+      const double* sh = &hS[3 * static_cast<std::size_t>(sl)];
       if (sh[0] == 0 && sh[1] == 0 && sh[2] == 0) continue;
       const int j = nbr[static_cast<std::size_t>(e)];
       if (a < n) {
