@@ -1243,8 +1243,12 @@ void DemSolver::Impl::forces(bool update) {
           }
           ++nc;
         }
-        const double ov = delta / std::min(ri, rj);
-        if (ov > worst) worst = ov, worstId = p.id[ownI ? i : u], worstPartner = p.id[ownI ? u : i];
+        const double rmin = std::min(ri, rj);
+        if (delta > worst * rmin) {  // largest overlap / smaller radius, divided only when larger
+          worst = delta / rmin;
+          worstId = p.id[ownI ? i : u];
+          worstPartner = p.id[ownI ? u : i];
+        }
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
         const double dist = s == 0 ? xi[d] - origin[d] : origin[d] + L[d] - xi[d];
