@@ -13,15 +13,16 @@
 //   4. forces: gravity + fExt + contacts + walls                        (DemForce)
 //   5. v += dt/2 F/m, omega += dt/2 T/I                                 (DemIntegrate)
 //
-// Determinism across rank counts. The Verlet list is a full list (each owned particle holds
-// every partner, owned or ghost) and a particle's row visits the 27 stencil bins in a fixed
-// order and, inside a bin, partners in increasing global id. The force on a particle is thus
-// the same sum in the same order at any rank count, and trajectories agree bit for bit between
-// 1, 2 and 4 ranks (what the serial-vs-parallel test checks, with the 1e-10 bound of the
-// issue). The price is that each contact is evaluated twice (once per partner); the gain is
-// that no force is ever sent back to a ghost's owner, the tangential history of a contact is
-// simply a property of each particle's row (keyed by the partner's global id) and travels with
-// the particle at migration.
+// Determinism across rank counts. The Verlet list is a half list with Newton's third law inside
+// the rank (an owned-ghost pair is computed by each rank for its own particle, so nothing goes
+// back to a ghost's owner). Every local particle has a canonical key K = (global bin in (z, y, x)
+// order, unwrapped across periodic faces; global id); holders are visited in K order and list
+// their partners of larger K in increasing K, and a pair is always computed with the lower-K
+// particle first. A particle therefore receives the same terms in the same order at any rank
+// count (lower-K partners, then its own row, then walls), and trajectories agree bit for bit
+// between 1, 2 and 4 ranks (what the serial-vs-parallel test checks, with the 1e-10 bound of the
+// issue). The tangential history lives in a pool of touching pairs only; at a rebuild it becomes
+// rows per owned particle keyed by the partner's global id, which travel with the particle.
 //
 // Ownership follows the bins: a particle belongs to the rank whose bins contain
 // floor((x - origin)/bin) along each axis (clamped into the box). Bin edges coincide with CFD
