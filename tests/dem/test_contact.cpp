@@ -151,4 +151,39 @@ TEST(DemContact, SlidingSphereRolls) {
   EXPECT_NEAR(rollEnd, vEnd, 0.02 * vEnd);                   // rolling without slip
 }
 
+TEST(DemContact, RollingResistanceDecelerates) {
+  // A sphere rolling without slip on the floor with rolling resistance mu_r (constant directional
+  // torque mu_r R* |F_n|, R* = r, |F_n| = m g): T/r = (m + I/r^2) a gives a = 5/7 mu_r g.
+  const double r = 0.005, mu = 0.5, muR = 0.1, g = 9.81, v0 = 0.5, dt = 2e-5;
+  const double m = kRho * 4.0 / 3.0 * M_PI * r * r * r;
+  const double delta = std::pow(3 * m * g / (4 * estar() * std::sqrt(r)), 2.0 / 3.0);
+  std::ostringstream c;
+  c << "{\"gravity\": [0, 0, " << -g << "], \"domain\": {\"length\": [0.2, 0.04, 0.04], "
+    << "\"cells\": [10, 2, 2]}, \"particles\": {\"dt\": " << dt
+    << ", \"materials\": [{\"density\": " << kRho << ", \"young\": " << kE
+    << ", \"poisson\": " << kNu << ", \"restitution\": 0.5, \"friction\": " << mu
+    << ", \"rolling_friction\": " << muR << "}], \"sources\": [{\"type\": \"list\", "
+    << "\"positions\": [0.02, 0.02, " << r - delta << "], \"radius\": " << r << "}]}}";
+  demtest::Case run(c.str());
+  auto& p = run.p();
+  for (int s = 0; s < 2500; ++s) run.dem->substep();
+  ASSERT_LT(std::fabs(p.v[2][0]), 1e-6);
+  p.v[0][0] = v0;
+  p.omega[1][0] = v0 / r;  // rolling without slip
+  double st = 0, sv = 0, stt = 0, stv = 0, n = 0;
+  for (int s = 1; s <= 5000; ++s) {
+    run.dem->substep();
+    if (s > 500) {
+      const double t = s * dt, v = p.v[0][0];
+      st += t, sv += v, stt += t * t, stv += t * v, n += 1;
+    }
+  }
+  const double slope = (n * stv - st * sv) / (n * stt - st * st);
+  const double ref = 5.0 / 7.0 * muR * g;
+  std::printf("rolling resistance: deceleration %.5f (ref %.5f), omega r / v %.6f\n", -slope, ref,
+              p.omega[1][0] * r / p.v[0][0]);
+  EXPECT_NEAR(-slope, ref, 0.02 * ref);  // tolerance 2 %
+  EXPECT_NEAR(p.omega[1][0] * r, p.v[0][0], 0.02 * p.v[0][0]);
+}
+
 }  // namespace

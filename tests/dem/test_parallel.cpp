@@ -95,6 +95,44 @@ TEST(DemParallel, GasMatchesSerial) {
   EXPECT_GT(diag["contacts_per_particle"].get<double>(), 0.0);  // collisions happen
 }
 
+TEST(DemParallel, RollingResistanceGasMatchesSerial) {
+  // the pair path with rolling resistance (the torque pushed to both particles of a pair)
+  std::string text = kGas;
+  const std::string key = R"("friction": 0.5})";
+  text.replace(text.find(key), key.size(), R"("friction": 0.5, "rolling_friction": 0.2})");
+  const long n = 2000;
+  Case par(text);
+  Case ser(text, kSelf, {1, 1, 1});
+  for (int s = 0; s < 500; ++s) {
+    par.dem->substep();
+    ser.dem->substep();
+  }
+  const auto tp = demtest::table(par, n);
+  const auto ts = demtest::table(ser, n);
+  double worst = 0, wmax = 0;
+  for (long k = 0; k < n; ++k) {
+    const auto b = static_cast<std::size_t>(10 * k);
+    for (int d = 0; d < 3; ++d) {
+      worst = std::max(worst, std::fabs(tp[b + 1 + d] - ts[b + 1 + d]) / 0.04);
+      wmax = std::max(wmax, std::fabs(ts[b + 7 + d]));
+    }
+  }
+  double wdiff = 0;
+  for (long k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d) {
+      const auto b = static_cast<std::size_t>(10 * k + 7 + d);
+      wdiff = std::max(wdiff, std::fabs(tp[b] - ts[b]) / wmax);
+    }
+  if (par.dec.comm().isRoot())
+    std::printf(
+        "rolling gas, ranks %d: max |x - x_serial|/L = %.3e, max |w - w_serial|/max|w| = "
+        "%.3e, max |w| %.3e rad/s\n",
+        par.dec.size(), worst, wdiff, wmax);
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_LE(wdiff, 1e-10);
+  EXPECT_GT(wmax, 0.0);
+}
+
 std::string slidingCase() {
   // Floor at z = 0, gravity; blocks cut along x only (faces at 0.08, 0.16, 0.24 on 4 ranks).
   // A (id 0) and B (id 1) touch along x across x = 0.16, pressed together by fExt, sliding
