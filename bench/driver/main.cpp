@@ -1,11 +1,12 @@
 // coloc — the command-line driver.
 //
-//   coloc run CASE.json [--set key.path=value ...] [--out DIR]
+//   coloc run CASE.json [--set key.path=value ...] [--out DIR] [--restart CHECKPOINT.h5]
 //   coloc keys            every case-file key, its type, default, range and meaning
 //   coloc --help
 //
 // Errors in the input are found identically on every rank: rank 0 prints one message naming the
-// key, and every rank exits with status 2. Nothing waits in a collective.
+// key, and every rank exits with status 2. Nothing waits in a collective. A run that fails inside
+// the time loop (a blow-up) exits with status 3 on every rank (bench/driver/run.hpp).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
@@ -33,6 +34,10 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);
   run->add_option("--out", opts.outDir, "output directory (default: out/<case name>)");
   run->add_flag("--quiet", opts.quiet, "no progress lines");
+  run->add_option("--restart", opts.restart,
+                  "continue from this checkpoint (output.checkpoint_*) instead of the case's "
+                  "initial condition, on any rank count; run.steps/run.end_time count from the "
+                  "start of the original run");
   app.add_subcommand("keys", "list every case-file key with type, default, range and meaning");
 
   try {

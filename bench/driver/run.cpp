@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/report.hpp"
@@ -12,31 +13,47 @@
 namespace coloc {
 namespace {
 
-/// Rank 0 prints a progress line every `interval` seconds: step, time, rate, time left.
+/// Rank 0 prints a progress line every `interval` seconds: step, simulated time, step rate,
+/// estimated time left and the pressure iterations (last, average over the run).
 class Progress {
  public:
-  Progress(const Comm& comm, double interval) : root_(comm.isRoot()), interval_(interval) {
+  Progress(const Comm& comm, double interval, const coupling::Simulation& sim)
+      : root_(comm.isRoot()), interval_(interval), steps0_(sim.steps()), time0_(sim.time()) {
     t0_ = last_ = MPI_Wtime();
   }
-  void update(const coupling::Simulation& sim, long long maxSteps, double endTime) {
+  void update(coupling::Simulation& sim, long long maxSteps, double endTime) {
     if (!root_ || interval_ <= 0) return;
     const double now = MPI_Wtime();
     if (now - last_ < interval_) return;
     last_ = now;
-    const double rate = static_cast<double>(sim.steps()) / (now - t0_);
+    const double elapsed = std::max(now - t0_, 1e-300);
+    const double done = static_cast<double>(sim.steps() - steps0_);
+    const double rate = done / elapsed;
     double left = 0;
-    if (maxSteps > 0)
+    char total[32] = "";
+    if (maxSteps > 0) {
       left = static_cast<double>(maxSteps - sim.steps()) / std::max(rate, 1e-300);
-    else if (sim.time() > 0)
-      left = (endTime - sim.time()) / sim.time() * (now - t0_);
-    std::printf("coloc: step %lld  t = %.6g s  dt = %.3g s  %.2f steps/s  %.0f s left\n",
-                sim.steps(), sim.time(), sim.lastDt(), rate, left);
+      std::snprintf(total, sizeof total, "/%lld", maxSteps);
+    } else if (sim.time() > time0_) {
+      left = (endTime - sim.time()) / (sim.time() - time0_) * elapsed;
+    }
+    char pressure[96] = "";
+    if (const auto* f = sim.fluid()) {
+      const fv::FluidCounters c = f->counters();
+      if (c.solves > 0)
+        std::snprintf(pressure, sizeof pressure, "  p-iter %lld (avg %.1f)", c.itLast,
+                      static_cast<double>(c.itSum) / static_cast<double>(c.solves));
+    }
+    std::printf("coloc: step %lld%s  t = %.6g s  dt = %.3g s  %.2f steps/s  %.0f s left%s\n",
+                sim.steps(), total, sim.time(), sim.lastDt(), rate, std::max(left, 0.0), pressure);
     std::fflush(stdout);
   }
 
  private:
   bool root_;
   double interval_, t0_, last_;
+  long long steps0_;
+  double time0_;
 };
 
 /// A per-step time series of the first particles and of coupling totals (series.csv).
@@ -81,6 +98,9 @@ class Series {
     }
     out_ << "\n";
   }
+  void flush() {
+    if (out_.is_open()) out_.flush();
+  }
 
  private:
   const Comm& comm_;
@@ -102,7 +122,14 @@ int runCase(const Comm& world, const RunOptions& opts) {
                                  ? (std::filesystem::path("out") / cfg.string("name")).string()
                                  : opts.outDir;
   if (world.isRoot()) makeDirectories(outDir);
-  coupling::Simulation sim(world, cfg);
+  const CheckpointOptions checkpoint = checkpointOptionsFromConfig(cfg, outDir);
+  std::unique_ptr<coupling::Simulation> simulation;
+  if (opts.restart.empty())
+    simulation = std::make_unique<coupling::Simulation>(world, cfg);
+  else
+    simulation = std::make_unique<coupling::Simulation>(
+        cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
+  coupling::Simulation& sim = *simulation;
   const double setupWall = MPI_Wtime() - t0;
   const long long particleCount =
       sim.particles() ? sim.particles()->globalCount() : 0;  // collective
@@ -114,18 +141,57 @@ int runCase(const Comm& world, const RunOptions& opts) {
         cfg.string("name").c_str(), runModeName(sim.mode()), dec.size(), dec.dims()[0],
         dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()), particleCount,
         setupWall);
+    if (!opts.restart.empty())
+      std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
+                  sim.steps(), sim.time());
   }
-  Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"));
+  Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), sim);
   Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);
   OutputWriter output(sim.decomposition(), outputOptionsFromConfig(cfg, outDir));
   sim.writeOutput(output);
-  sim.timers().beginRun();
+  sim.beginRun();
   const double tLoop = MPI_Wtime();
-  while (!sim.finished()) {
-    sim.step();
-    sim.writeOutput(output);
-    series.record(sim);
-    progress.update(sim, cfg.integer("run.steps"), cfg.number("run.end_time"));
+  try {
+    while (!sim.finished()) {
+      sim.step();
+      sim.writeOutput(output);
+      series.record(sim);
+      if (checkpoint.due(sim.steps())) sim.writeCheckpoint(checkpoint.pathAt(sim.steps()));
+      progress.update(sim, cfg.integer("run.steps"), cfg.number("run.end_time"));
+    }
+    // The final state, unless the last step wrote it already.
+    if (checkpoint.intervalSteps > 0 && !checkpoint.due(sim.steps()))
+      sim.writeCheckpoint(checkpoint.pathAt(sim.steps()));
+  } catch (const Error& e) {
+    // A failure inside the time loop reaches every rank here together (the solvers raise their
+    // checks collectively). Keep the state for inspection, say what happened, exit non-zero.
+    char when[160];
+    std::snprintf(when, sizeof when, "the run failed in step %lld (from t = %.9g s)",
+                  sim.steps() + 1, sim.time());
+    const std::string message = e.what();
+    std::string saved, saveError;
+    if (checkpoint.onFailure) {
+      const std::string path = failedCheckpointPath(checkpoint.pathAt(sim.steps() + 1));
+      try {
+        sim.writeCheckpoint(path, "failed: " + std::string(when) + ": " + message);
+        saved = path;
+      } catch (const Error& e2) {
+        saveError = e2.what();
+      }
+    }
+    series.flush();
+    if (world.isRoot()) {
+      std::fprintf(stderr, "coloc: error: %s: %s\n", when, message.c_str());
+      if (!saved.empty())
+        std::fprintf(stderr,
+                     "coloc: the state at the failure is in %s (status 'failed'; not "
+                     "restartable)%s%s\n",
+                     saved.c_str(), checkpoint.intervalSteps > 0 ? "; last good checkpoint: " : "",
+                     checkpoint.intervalSteps > 0 ? checkpoint.path.c_str() : "");
+      if (!saveError.empty())
+        std::fprintf(stderr, "coloc: could not write the failed state: %s\n", saveError.c_str());
+    }
+    return kRunFailedStatus;
   }
   const double loopWall = MPI_Wtime() - tLoop;
 

@@ -5,8 +5,10 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include "coloc/core/error.hpp"
+#include "coloc/coupling/checkpoint.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -140,6 +142,12 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
 }
 
 Simulation::Simulation(const Config& cfg, Layouts layouts)
+    : Simulation(cfg, std::move(layouts), nullptr) {}
+
+Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string& checkpoint)
+    : Simulation(cfg, std::move(layouts), &checkpoint) {}
+
+Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint)
     : cfg_(cfg),
       layouts_(std::move(layouts)),
       dec_(layouts_.fluid),
@@ -151,11 +159,25 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
   endTime_ = cfg.number("run.end_time");
   if (maxSteps_ == 0 && endTime_ <= 0)
     throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
-  if (mode_ != RunMode::ParticlesOnly)
+  // Restart: the checkpoint is checked (status, grid, mode) and read on these blocks.
+  std::optional<H5File> file;
+  if (checkpoint) {
+    checkRestartable(dec_.comm(), *checkpoint, dec_.grid(), mode_);
+    file.emplace(H5File::openRead(dec_.comm(), *checkpoint));
+  }
+  if (mode_ != RunMode::ParticlesOnly) {
     fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
+    if (file) readFluidState(*file, "/fluid", dec_, *fluid_);
+  }
   if (mode_ != RunMode::FluidOnly) {
-    dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
+    dem_ = file ? std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
+                                                   readDemState(*file, "/particles"))
+                : std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
     if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
+  }
+  if (file) {
+    restoreCounters(*file);
+    file->close();
   }
   coupled_ = mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem;
   if (!coupled_) return;
@@ -166,7 +188,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
   smoothingPasses_ = static_cast<int>(cfg.integer("coupling.smoothing_passes"));
   rhoF_ = cfg.number("fluid.rho");
   nu_ = cfg.number("fluid.nu");
-  const FieldLayout layout = fluid_->fields().p.layout();
+  const FieldLayout layout = std::as_const(*fluid_).fields().p.layout();
   solid_ = CellField(layout);
   scratch_ = CellField(layout);
   eps_ = CellField(layout, 1.0);
@@ -181,6 +203,19 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
   oneLayer.ghost = 1;
   halo_ = HaloPlan(dec_, oneLayer);
 
+  if (checkpoint) {
+    // What the last step left in the coupling's own fields: eps (with its ghosts), the
+    // cell-centred velocity and the pressure gradient of u^{n+1}, p^{n+1}.
+    const auto& f = std::as_const(*fluid_).fields();
+    forEach(eps_.interior(), [&](int i, int j, int k) { eps_(i, j, k) = f.eps(i, j, k); });
+    halo_.gather(eps_);
+    fillWallGhostsByMirror(dec_, eps_);
+    fluid_->cellVelocity(uCell_);
+    for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
+    fluid_->pressureGradient(gradP_);
+    for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
+    return;
+  }
   // The initial porosity: deposit the particle volume once and start with eps^0 = eps^1 so the
   // first step sees no spurious d(eps)/dt.
   gatherParticles();
@@ -199,6 +234,12 @@ Simulation::Simulation(const Config& cfg, Layouts layouts)
 }
 
 Simulation::~Simulation() = default;
+
+void Simulation::beginRun() {
+  timers_.beginRun();
+  runStartSteps_ = steps_;
+  runStartSubsteps_ = substeps_;
+}
 
 bool Simulation::finished() const {
   // A fluid-only run may stop at steady state (same verdict on every rank).
@@ -650,18 +691,17 @@ Json Simulation::report(double wallSeconds) const {
   Json out = timers_.report(comm, wallSeconds);
   const double wall = comm.max(wallSeconds);
   out["mpi"] = {{"ranks", comm.size()}, {"dims", {dec_.dims()[0], dec_.dims()[1], dec_.dims()[2]}}};
-  out["run"] = {{"mode", runModeName(mode_)},
-                {"steps", steps_},
-                {"dem_substeps", substeps_},
-                {"sim_time", time_},
-                {"wall_s", wall}};
+  out["run"] = {{"mode", runModeName(mode_)}, {"steps", steps_}, {"dem_substeps", substeps_},
+                {"sim_time", time_},          {"wall_s", wall},  {"first_step", runStartSteps_}};
   const long long particles = dem_ ? dem_->globalCount() : 0;
   const double cells = static_cast<double>(dec_.grid().cellCount());
   out["throughput"] = {
-      {"cell_steps_per_s", fluid_ && wall > 0 ? cells * static_cast<double>(steps_) / wall : 0.0},
-      {"particle_steps_per_s",
-       dem_ && wall > 0 ? static_cast<double>(particles) * static_cast<double>(substeps_) / wall
-                        : 0.0}};
+      {"cell_steps_per_s",
+       fluid_ && wall > 0 ? cells * static_cast<double>(steps_ - runStartSteps_) / wall : 0.0},
+      {"particle_steps_per_s", dem_ && wall > 0
+                                   ? static_cast<double>(particles) *
+                                         static_cast<double>(substeps_ - runStartSubsteps_) / wall
+                                   : 0.0}};
   out["checks"] = {{"momentum_balance", momentumResidual_}, {"mass_balance", 0.0}};
   if (fluid_) {
     const Json fd = fluid_->diagnostics();

@@ -83,6 +83,18 @@ class Simulation {
   Simulation(const Comm& world, const Config& cfg);
   /// With explicit blocks (tests, calibration runs).
   Simulation(const Config& cfg, Layouts layouts);
+  /// Restart / re-balance: the state of `checkpoint` (coupling/checkpoint.hpp, written by
+  /// writeCheckpoint) on the blocks `layouts`, which may differ from those that wrote it (any rank
+  /// count, same grid). Nothing comes from the case's initial condition: the particles are those
+  /// of the file (sent to their owners), the fluid fields are read block by block. `cfg` gives
+  /// the parameters; run.steps / run.end_time count from the start of the original run. On the
+  /// blocks that wrote it the run continues bitwise as the original; on others to round-off.
+  /// Collective; coloc::Error on every rank for a missing, corrupt, failed or foreign file.
+  Simulation(const Config& cfg, Layouts layouts, const std::string& checkpoint);
+  /// The blocks to restart from `checkpoint` on `world`: those that wrote it when the rank count
+  /// and partition.strategy are the same, else chooseLayouts(). Checks the file first.
+  static Layouts restartLayouts(const Comm& world, const Config& cfg,
+                                const std::string& checkpoint);
   /// The blocks partition.strategy asks for (may build temporary solvers to see the particles).
   static Layouts chooseLayouts(const Comm& world, const Config& cfg);
   ~Simulation();
@@ -120,10 +132,22 @@ class Simulation {
   /// XDMF when the writer says this step is due. Collective.
   void writeOutput(OutputWriter& out);
 
+  /// The timed loop starts: timers().beginRun(), and the throughput of report() counts the
+  /// steps from here (a restarted run's own steps).
+  void beginRun();
+  /// The complete state to one HDF5 file, atomically (path.tmp renamed once every rank closed
+  /// it): fluid fields and AB2 history, the DEM state (DemSolver::saveState, which forces a
+  /// neighbour rebuild: the only effect on the run), the counters, the blocks and `status`
+  /// ("ok", or "failed: <message>" for the state at a failure; the particles are then taken
+  /// as they are if the DEM's snapshot fails too). Collective.
+  void writeCheckpoint(const std::string& path, const std::string& status = "ok");
+
   /// Report entries of the run (collective): throughput, exchange, fractions, checks, ...
   Json report(double wallSeconds) const;
 
  private:
+  Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint);
+  void restoreCounters(H5File& file);
   void gatherParticles();
   void computeStencils();
   void sampleFluidForDrag();
@@ -150,7 +174,9 @@ class Simulation {
     /// less the coupling force it held (co-located), or the value received with the proxy
     /// (independent: held is null).
     std::array<const double*, 3> x{}, v{}, force{}, held{};
-    double nonDrag(int d, std::size_t i) const { return force[d][i] - (held[d] ? held[d][i] : 0.0); }
+    double nonDrag(int d, std::size_t i) const {
+      return force[d][i] - (held[d] ? held[d][i] : 0.0);
+    }
     const double* radius = nullptr;
     const double* mass = nullptr;
     const std::int64_t* id = nullptr;
@@ -199,6 +225,7 @@ class Simulation {
 
   double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
+  long long runStartSteps_ = 0, runStartSubsteps_ = 0;  // counters at beginRun() (throughput)
   std::array<double, 3> particleImpulse_{}, fluidImpulse_{};
   double momentumResidual_ = 0, solidVolume_ = 0, accelL1_ = 0;
 };

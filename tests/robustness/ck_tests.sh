@@ -1,0 +1,153 @@
+#!/usr/bin/env bash
+# ck_tests.sh TEST COLOC MPIEXEC PYTHON CASE WORKDIR — checkpoint/restart and blow-up tests of the
+# `coloc` driver on the tiny fluidised bed tests/robustness/cases/bed.json (docs/output.md).
+#
+#   readback       a checkpoint read back with h5py equals the run's regular output of that step
+#   identity NP    N+M steps with checkpoints vs a restart from step N on NP ranks: the final
+#                  checkpoints and the series.csv rows are identical, the report's physics equal
+#   ranks          1 rank to step 12; restart on 2 ranks from step 4; on 4 ranks from step 8:
+#                  final states equal to 1e-10 (relative)
+#   kill           a run SIGKILLed while writing a checkpoint (after the data, before the rename)
+#                  keeps the previous checkpoint, which restarts and ends as the uninterrupted run
+#   blowup E K=V   a restart made unstable by K=V (an inlet far too fast, a tiny overlap limit):
+#                  message E, exit 3 on every rank, no hang, a readable checkpoint marked failed,
+#                  the last good one kept, and a restart from the failed one refused
+#   badrestart     --restart with a missing, a corrupt, another grid's and a failed checkpoint:
+#                  a clear error, non-zero exit, no hang
+set -u
+test=$1 coloc=$2 mpiexec=$3 py=$4 case=$5 work=$6
+shift 6
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+cmp="$py $here/compare_checkpoints.py"
+expect="$here/../common/expect_error.sh"
+rm -rf "$work" && mkdir -p "$work" || exit 1
+fail() { echo "FAIL: $*"; exit 1; }
+# run NP OUT [args...]: coloc run CASE on NP ranks (time-limited: a hang fails)
+run() {
+  local np=$1 out=$2
+  shift 2
+  timeout 120 "$mpiexec" -n "$np" --bind-to none "$coloc" run "$case" --out "$out" --quiet "$@" \
+    > "$out.log" 2>&1
+  local rc=$?
+  [[ $rc -eq 124 ]] && { cat "$out.log"; fail "timed out (hang): $*"; }
+  return $rc
+}
+# series rows of steps > $3 of file $1 equal those of file $2 (after the header)
+same_series_tail() {
+  local n
+  n=$(($(wc -l < "$2") - 1))
+  diff <(tail -n "$n" "$1") <(tail -n "$n" "$2") > /dev/null || fail "series.csv rows differ: $1 $2"
+  [[ $(head -1 "$1") == $(head -1 "$2") ]] || fail "series.csv headers differ"
+}
+# the report's physics (not timings) equal
+same_report() {
+  "$py" - "$1" "$2" <<'EOF' || fail "reports differ: $1 $2"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+keys = [("run", "steps"), ("run", "dem_substeps"), ("run", "sim_time"), ("checks", "momentum_balance"),
+        ("checks", "mass_balance"), ("pressure", "iterations_avg"), ("pressure", "iterations_max"),
+        ("pressure", "iterations_last"), ("fluid", "time"), ("fluid", "dt_last"),
+        ("fluid", "steady_residual"), ("fluid", "drag_force"), ("coupling", "solid_volume"),
+        ("particles", "count")]
+bad = [k for k in keys if a[k[0]][k[1]] != b[k[0]][k[1]]]
+for k in bad: print("report", ".".join(k), a[k[0]][k[1]], "vs", b[k[0]][k[1]])
+sys.exit(1 if bad else 0)
+EOF
+}
+
+case $test in
+  readback)
+    run 2 "$work/a" --set run.steps=6 --set output.interval_steps=3 --set output.checkpoint_interval=3 \
+      --set output.checkpoint_file=ck_{step}.h5 || { cat "$work/a.log"; fail "run failed"; }
+    for s in 000003 000006; do
+      "$py" "$here/check_checkpoint.py" "$work/a/ck_$s.h5" "$work/a/fields_$s.h5" \
+        "$work/a/particles_$s.h5" || fail "checkpoint $s"
+    done
+    ;;
+  identity)
+    np=$1
+    common=(--set run.steps=10 --set output.checkpoint_interval=5 --set output.checkpoint_file=ck_{step}.h5)
+    run "$np" "$work/a" "${common[@]}" || { cat "$work/a.log"; fail "run a failed"; }
+    run "$np" "$work/b" "${common[@]}" --restart "$work/a/ck_000005.h5" ||
+      { cat "$work/b.log"; fail "restart failed"; }
+    [[ -f $work/b/ck_000005.h5 ]] && fail "the restart rewrote the step-5 checkpoint"
+    $cmp "$work/a/ck_000010.h5" "$work/b/ck_000010.h5" || fail "final checkpoints differ"
+    same_series_tail "$work/a/series.csv" "$work/b/series.csv"
+    [[ $(wc -l < "$work/b/series.csv") -eq 6 ]] || fail "restart series should hold steps 6-10"
+    same_report "$work/a/report.json" "$work/b/report.json"
+    ;;
+  ranks)
+    common=(--set run.steps=12 --set output.checkpoint_interval=4 --set output.checkpoint_file=ck_{step}.h5)
+    run 1 "$work/a" "${common[@]}" || { cat "$work/a.log"; fail "run a (1 rank) failed"; }
+    run 2 "$work/b" "${common[@]}" --restart "$work/a/ck_000004.h5" ||
+      { cat "$work/b.log"; fail "restart on 2 ranks failed"; }
+    run 4 "$work/c" "${common[@]}" --restart "$work/b/ck_000008.h5" ||
+      { cat "$work/c.log"; fail "restart on 4 ranks failed"; }
+    $cmp "$work/a/ck_000008.h5" "$work/b/ck_000008.h5" --rtol 1e-10 || fail "1 vs 2 ranks, step 8"
+    $cmp "$work/a/ck_000012.h5" "$work/b/ck_000012.h5" --rtol 1e-10 || fail "1 vs 2 ranks"
+    $cmp "$work/a/ck_000012.h5" "$work/c/ck_000012.h5" --rtol 1e-10 || fail "1 vs 2 vs 4 ranks"
+    ;;
+  kill)
+    common=(--set run.steps=8 --set output.checkpoint_interval=2)
+    run 2 "$work/full" "${common[@]}" || { cat "$work/full.log"; fail "uninterrupted run failed"; }
+    (export COLOC_TEST_KILL_IN_CHECKPOINT=6; run 2 "$work/k" "${common[@]}") &&
+      fail "the killed run exited 0"
+    [[ -f $work/k/checkpoint.h5 ]] || fail "no checkpoint left by the killed run"
+    [[ -f $work/k/checkpoint.h5.tmp ]] || echo "note: no checkpoint.h5.tmp left (killed early)"
+    "$py" -c "import h5py,sys; f=h5py.File(sys.argv[1]); assert f.attrs['step']==4, f.attrs['step']" \
+      "$work/k/checkpoint.h5" || fail "the surviving checkpoint is not that of step 4"
+    run 2 "$work/k" "${common[@]}" --restart "$work/k/checkpoint.h5" ||
+      { cat "$work/k.log"; fail "restart from the surviving checkpoint failed"; }
+    $cmp "$work/full/checkpoint.h5" "$work/k/checkpoint.h5" || fail "restarted run differs"
+    ;;
+  blowup)
+    # blowup EXPECTED KEY=VALUE: 3 good steps with checkpoints, then a restart with KEY=VALUE
+    # that makes step 4 fail on some rank (the others learn it collectively), e.g. an inlet 100
+    # times too fast (fluid CFL check) or a tiny particles.overlap_limit (DEM check).
+    expected=$1 breaker=$2
+    run 2 "$work/u" --set run.steps=3 --set output.checkpoint_interval=1 ||
+      { cat "$work/u.log"; fail "run failed"; }
+    "$expect" "$expected" -- "$mpiexec" -n 2 --bind-to none "$coloc" \
+      run "$case" --out "$work/u" --quiet --restart "$work/u/checkpoint.h5" \
+      --set run.steps=10 --set output.checkpoint_interval=1 --set "$breaker" \
+      > "$work/u2.log" 2>&1
+    rc=$?
+    cat "$work/u2.log"
+    [[ $rc -eq 0 ]] || fail "expected the blow-up message"
+    grep -q "the run failed in step 4 " "$work/u2.log" || fail "no step in the message"
+    failed=$work/u/checkpoint.failed.h5
+    [[ -f $failed ]] || fail "no failed checkpoint"
+    "$py" - "$failed" "$work/u/checkpoint.h5" "$expected" <<'EOF' || fail "checkpoints after the failure"
+import h5py, sys
+f = h5py.File(sys.argv[1], "r")
+st = f.attrs["status"].decode()
+print("status:", st)
+assert st.startswith("failed: the run failed in step 4"), st
+assert sys.argv[3] in st, st
+assert f["fluid/p"].shape == (16, 4, 4) and f["particles"].attrs["count"] == 400
+g = h5py.File(sys.argv[2], "r")
+assert g.attrs["status"].decode() == "ok" and g.attrs["step"] == 3, "last good checkpoint lost"
+EOF
+    "$expect" "its status is 'failed" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" \
+      --out "$work/r" --quiet --restart "$failed" || fail "restart from a failed checkpoint"
+    ;;
+  badrestart)
+    run 2 "$work/a" --set run.steps=2 --set output.checkpoint_interval=2 ||
+      { cat "$work/a.log"; fail "run failed"; }
+    echo "not an HDF5 file" > "$work/corrupt.h5"
+    head -c 3000 "$work/a/checkpoint.h5" > "$work/truncated.h5"
+    for t in "no such file|$work/missing.h5" "cannot open|$work/corrupt.h5" \
+             "checkpoint '$work/truncated.h5'|$work/truncated.h5"; do
+      "$expect" "${t%%|*}" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out \
+        "$work/x" --quiet --restart "${t#*|}" || fail "--restart ${t#*|}"
+    done
+    "$expect" "its grid has 4x4x16 cells, the case 4x4x20" -- "$mpiexec" -n 2 --bind-to none \
+      "$coloc" run "$case" --out "$work/x" --quiet --set "domain.cells=[4,4,20]" \
+      --restart "$work/a/checkpoint.h5" || fail "restart on another grid"
+    "$expect" "it was written in run.mode coupled" -- "$mpiexec" -n 2 --bind-to none \
+      "$coloc" run "$case" --out "$work/x" --quiet --set run.mode=fluid \
+      --restart "$work/a/checkpoint.h5" || fail "restart in another mode"
+    ;;
+  *) fail "unknown test $test" ;;
+esac
+echo "PASS: $test"
