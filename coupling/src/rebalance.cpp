@@ -1,6 +1,7 @@
 #include "coloc/coupling/rebalance.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "coloc/partition/balance.hpp"
 
@@ -56,6 +57,22 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
             best.imbalance(), 1.0};
   plan.layouts = std::move(L);
   return plan;
+}
+
+std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, const Config& cfg,
+                                           Layouts layouts, const std::string& scratch) {
+  const double t0 = MPI_Wtime(), c0 = threadCpuSeconds();
+  Timers timers = sim->timers();
+  const Comm& comm = sim->decomposition().comm();
+  sim->writeCheckpoint(scratch);
+  const bool root = comm.isRoot();
+  sim.reset();
+  auto next = std::make_unique<Simulation>(cfg, std::move(layouts), scratch);
+  next->decomposition().comm().barrier();
+  if (root) std::remove(scratch.c_str());
+  timers.add(Phase::Rebalance, MPI_Wtime() - t0, threadCpuSeconds() - c0);
+  next->timers() = timers;
+  return next;
 }
 
 }  // namespace coloc::coupling

@@ -31,5 +31,10 @@ struct RebalancePlan {
 bool rebalanceDue(const Config& cfg, long long steps);
 /// The new blocks for the particles as they are now. Collective.
 RebalancePlan planRebalance(Simulation& sim, const Config& cfg);
+/// Moves the run onto `layouts`: the state goes to the checkpoint `scratch` (removed afterwards),
+/// the simulation is built anew from it on the new blocks, and the timers carry over (the move
+/// itself booked to the rebalance phase). Collective.
+std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, const Config& cfg,
+                                           Layouts layouts, const std::string& scratch);
 
 }  // namespace coloc::coupling

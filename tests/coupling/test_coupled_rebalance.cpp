@@ -1,0 +1,151 @@
+// Re-balancing during a run (partition.rebalance_interval): a balanced run that starts on even
+// blocks with its particles in the lower part of the box moves onto new cuts, carrying cells,
+// particles and contact histories together. Checked against a serial run of the same case:
+// every particle's position and velocity equal to 1e-10 relative at the end; across the move,
+// the particle set, the fluid fields (sums over the cells) and every contact history (by pair of
+// global ids) are unchanged; the new blocks lower the modelled imbalance.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "coloc/coupling/rebalance.hpp"
+#include "coloc/partition/setup.hpp"
+#include "coupled_util.hpp"
+
+using namespace coloc;
+
+namespace {
+
+constexpr int kCount = 800;
+
+// A bed settling in the lower quarter of a tall closed box with an outlet on top (even blocks
+// cut it along z: the upper blocks have no particles).
+const char* kCase = R"({
+  "domain": { "length": [0.06, 0.04, 0.12], "cells": [6, 4, 12] },
+  "gravity": [0.0, 0.0, -9.81],
+  "partition": { "strategy": "balanced", "rebalance_interval": 10, "rebalance_threshold": 1.02 },
+  "run": { "steps": 30 },
+  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-3,
+             "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 } },
+             "pressure": { "tol": 1e-13 } },
+  "particles": { "dt": 5e-5,
+    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3, "friction": 0.5 } ],
+    "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.058, 0.038, 0.03],
+                   "count": 800, "radius": 0.0014, "velocity_spread": 0.05 } ] },
+  "coupling": { "drag": "difelice" }
+})";
+
+/// Every particle's position and velocity by global id, on every rank.
+std::vector<double> trajectories(coupling::Simulation& sim) {
+  std::vector<double> s(6 * kCount, 0.0);
+  const auto& p = sim.particles()->particles();
+  for (std::size_t i = 0; i < p.nOwned; ++i)
+    for (int d = 0; d < 3; ++d) {
+      s[6 * static_cast<std::size_t>(p.id[i]) + static_cast<std::size_t>(d)] = p.x[d][i];
+      s[6 * static_cast<std::size_t>(p.id[i]) + 3 + static_cast<std::size_t>(d)] = p.v[d][i];
+    }
+  sim.decomposition().comm().sumInPlace(std::span<double>(s));
+  return s;
+}
+
+/// |tangential history| of every touching pair (a, b), a < b, on every rank (a pair split
+/// across blocks is held by both sides: the larger of the two, equal to round-off).
+std::vector<double> histories(coupling::Simulation& sim) {
+  std::vector<double> h(kCount * kCount, 0.0);
+  const dem::DemState s = sim.particles()->saveState();
+  for (const auto& c : s.contacts) {
+    const auto a = std::min(c.holder, c.partner), b = std::max(c.holder, c.partner);
+    const double n = std::sqrt(c.shear[0] * c.shear[0] + c.shear[1] * c.shear[1] +
+                               c.shear[2] * c.shear[2]);
+    double& slot = h[static_cast<std::size_t>(a * kCount + b)];
+    slot = std::max(slot, n);
+  }
+  sim.decomposition().comm().maxInPlace(std::span<double>(h));
+  return h;
+}
+
+/// Sums of eps, p and the face velocities over the owned cells, and the cell count (global).
+std::array<double, 4> fieldSums(coupling::Simulation& sim) {
+  std::array<double, 4> s{};
+  const auto& f = sim.fluid()->fields();
+  forEach(f.p.interior(), [&](int i, int j, int k) {
+    s[0] += f.eps(i, j, k);
+    s[1] += f.p(i, j, k);
+    s[2] += std::abs(f.u[2](i, j, k));
+    s[3] += 1.0;
+  });
+  sim.decomposition().comm().sumInPlace(std::span<double>(s));
+  return s;
+}
+
+}  // namespace
+
+TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
+  const Comm world = Comm::world();
+  MPI_Comm selfRaw;
+  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
+  {
+    const Config cfg = test::caseFromText(kCase);
+    const Config serialCfg = test::caseFromText(kCase, {"partition.rebalance_interval=0"});
+    const std::string scratch =
+        world.broadcast((std::filesystem::temp_directory_path() /
+                         ("coloc_rebalance_" + std::to_string(::getpid()) + ".h5"))
+                            .string());
+    // Start on even blocks although most of the box is empty of particles.
+    coupling::Layouts even{decompositionFromConfig(world, cfg), std::nullopt, "balanced",
+                           CostModel{}, 1.0, 1.0};
+    auto sim = std::make_unique<coupling::Simulation>(cfg, std::move(even));
+    coupling::Simulation ser(Comm(selfRaw), serialCfg);
+    int moves = 0;
+    while (!sim->finished()) {
+      sim->step();
+      ser.step();
+      if (!coupling::rebalanceDue(cfg, sim->steps())) continue;
+      const auto plan = coupling::planRebalance(*sim, cfg);
+      if (!plan.layouts) continue;
+      EXPECT_GT(plan.gain, 1.02);
+      EXPECT_LT(plan.newImbalance, plan.currentImbalance);
+      const auto before = trajectories(*sim);
+      const auto hBefore = histories(*sim);
+      const auto fBefore = fieldSums(*sim);
+      const long long steps = sim->steps();
+      const double time = sim->time();
+      const auto oldCuts = sim->decomposition().cuts();
+      sim = coupling::applyRebalance(std::move(sim), cfg, *plan.layouts, scratch);
+      ++moves;
+      EXPECT_NE(sim->decomposition().cuts(), oldCuts);
+      EXPECT_EQ(sim->steps(), steps);
+      EXPECT_EQ(sim->time(), time);
+      EXPECT_EQ(sim->particles()->globalCount(), kCount);
+      EXPECT_EQ(trajectories(*sim), before);  // the state moves bit for bit
+      const auto fAfter = fieldSums(*sim);
+      EXPECT_EQ(fAfter[3], fBefore[3]);
+      for (int q = 0; q < 3; ++q)
+        EXPECT_NEAR(fAfter[q], fBefore[q], 1e-12 * std::max(1.0, std::abs(fBefore[q])));
+      const auto hAfter = histories(*sim);
+      double hmax = 0;
+      int pairs = 0;
+      for (double v : hBefore) hmax = std::max(hmax, v);
+      for (std::size_t k = 0; k < hBefore.size(); ++k) {
+        pairs += hBefore[k] > 0;
+        ASSERT_EQ(hBefore[k] > 0, hAfter[k] > 0) << "pair " << k / kCount << "-" << k % kCount;
+        ASSERT_NEAR(hBefore[k], hAfter[k], 1e-12 * hmax);
+      }
+      EXPECT_GT(pairs, 0);  // the bed has sliding contacts to carry
+      if (world.isRoot())
+        std::printf("re-balanced at step %lld: modelled imbalance %.3f -> %.3f, %d sliding pairs\n",
+                    steps, plan.currentImbalance, plan.newImbalance, pairs);
+    }
+    if (world.size() > 1) EXPECT_GE(moves, 1);
+    EXPECT_FALSE(std::filesystem::exists(scratch));
+    const auto a = trajectories(*sim), b = trajectories(ser);
+    double vmax = 0;
+    for (std::size_t k = 0; k < b.size(); k += 6)
+      for (int d = 3; d < 6; ++d) vmax = std::max(vmax, std::abs(b[k + d]));
+    ASSERT_GT(vmax, 0.0);
+    for (std::size_t k = 0; k < a.size(); ++k)
+      ASSERT_NEAR(a[k], b[k], 1e-10 * (k % 6 < 3 ? 0.12 : vmax)) << "particle " << k / 6;
+  }
+  MPI_Comm_free(&selfRaw);
+}
