@@ -1,6 +1,7 @@
 #include "generate.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -49,13 +50,20 @@ SiteGrid siteGrid(const Json& src, double edge, const std::string& key) {
   return g;
 }
 
-void applySpread(NewParticle& p, const Json& src, std::uint64_t seed) {
-  const auto v = vec(src["velocity"]);
-  const double spread = src["velocity_spread"].get<double>();
+/// A source's velocity and spread, read from the case once per source (not per particle).
+struct Velocity {
+  std::array<double, 3> v{};
+  double spread = 0;
+  explicit Velocity(const Json& src)
+      : v(vec(src["velocity"])), spread(src["velocity_spread"].get<double>()) {}
+};
+
+void applySpread(NewParticle& p, const Velocity& vel, std::uint64_t seed) {
   for (int d = 0; d < 3; ++d) {
-    p.v[d] = v[d];
-    if (spread > 0)
-      p.v[d] += spread * (2.0 * uniform01(seed, static_cast<std::uint64_t>(p.id), 10 + d) - 1.0);
+    p.v[d] = vel.v[d];
+    if (vel.spread > 0)
+      p.v[d] +=
+          vel.spread * (2.0 * uniform01(seed, static_cast<std::uint64_t>(p.id), 10 + d) - 1.0);
   }
 }
 
@@ -149,6 +157,7 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
     const auto& src = sources[i];
     const std::string type = src["type"].get<std::string>();
     const int mat = static_cast<int>(src["material"].get<long long>());
+    const Velocity velocity(src);
     const auto put = [&](NewParticle& p) {
       if (owns(p.x)) add(p);
     };
@@ -156,13 +165,14 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
       const auto& pos = src["positions"];
       const auto& radii = src["radii"];
       const auto& vel = src["velocities"];
+      const double radius = radii.empty() ? src["radius"].get<double>() : 0.0;
       for (long long k = 0; k < info[i].count; ++k) {
         NewParticle p;
         p.id = base + k;
         p.material = mat;
-        p.radius = radii.empty() ? src["radius"].get<double>() : radii[k].get<double>();
+        p.radius = radii.empty() ? radius : radii[k].get<double>();
         for (int d = 0; d < 3; ++d) p.x[d] = pos[3 * k + d].get<double>();
-        applySpread(p, src, seed);
+        applySpread(p, velocity, seed);
         if (!vel.empty())
           for (int d = 0; d < 3; ++d) p.v[d] = vel[3 * k + d].get<double>();
         put(p);
@@ -193,7 +203,7 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
                 p.x[d] += jitter * free *
                           (2.0 * uniform01(seed, static_cast<std::uint64_t>(p.id), 2 + d) - 1.0);
             }
-            applySpread(p, src, seed);
+            applySpread(p, velocity, seed);
             put(p);
           }
     } else if (type == "random" || type == "layered") {
@@ -234,7 +244,7 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
               p.x[d] = sg.lo[d] + (static_cast<double>(k3[d]) + 0.5) * sg.s +
                        jitter * free * (2.0 * uniform01(seed, uid, 2 + d) - 1.0);
             }
-            applySpread(p, src, seed);
+            applySpread(p, velocity, seed);
             put(p);
           }
     }
