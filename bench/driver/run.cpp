@@ -8,6 +8,7 @@
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/report.hpp"
+#include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
 
 namespace coloc {
@@ -129,51 +130,73 @@ int runCase(const Comm& world, const RunOptions& opts) {
   else
     simulation = std::make_unique<coupling::Simulation>(
         cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
-  coupling::Simulation& sim = *simulation;
   const double setupWall = MPI_Wtime() - t0;
   const long long particleCount =
-      sim.particles() ? sim.particles()->globalCount() : 0;  // collective
+      simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
   if (world.isRoot() && !opts.quiet) {
-    const auto& dec = sim.decomposition();
+    const auto& dec = simulation->decomposition();
     std::printf(
         "coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
         "set-up %.2f s\n",
-        cfg.string("name").c_str(), runModeName(sim.mode()), dec.size(), dec.dims()[0],
+        cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(), dec.dims()[0],
         dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()), particleCount,
         setupWall);
     if (!opts.restart.empty())
       std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
-                  sim.steps(), sim.time());
+                  simulation->steps(), simulation->time());
   }
-  Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), sim);
-  Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), sim);
-  OutputWriter output(sim.decomposition(), outputOptionsFromConfig(cfg, outDir));
-  sim.writeOutput(output);
-  sim.beginRun();
+  Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
+  Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation);
+  OutputWriter output(simulation->decomposition(), outputOptionsFromConfig(cfg, outDir));
+  simulation->writeOutput(output);
+  simulation->beginRun();
   const double tLoop = MPI_Wtime();
+  long long rebalances = 0;
   try {
-    while (!sim.finished()) {
-      sim.step();
-      sim.writeOutput(output);
-      series.record(sim);
-      if (checkpoint.due(sim.steps())) sim.writeCheckpoint(checkpoint.pathAt(sim.steps()));
-      progress.update(sim, cfg.integer("run.steps"), cfg.number("run.end_time"));
+    while (!simulation->finished()) {
+      simulation->step();
+      simulation->writeOutput(output);
+      series.record(*simulation);
+      if (checkpoint.due(simulation->steps()))
+        simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
+      if (coupling::rebalanceDue(cfg, simulation->steps())) {
+        const auto plan = coupling::planRebalance(*simulation, cfg);
+        if (plan.layouts) {
+          simulation = coupling::applyRebalance(
+              std::move(simulation), cfg, *plan.layouts,
+              (std::filesystem::path(outDir) / "rebalance.tmp.h5").string());
+          output.rebind(simulation->decomposition());
+          ++rebalances;
+          if (world.isRoot() && !opts.quiet) {
+            const auto& d = simulation->decomposition().dims();
+            std::printf("coloc: step %lld: re-balanced onto %dx%dx%d blocks, modelled imbalance "
+                        "%.3f -> %.3f\n",
+                        simulation->steps(), d[0], d[1], d[2], plan.currentImbalance,
+                        plan.newImbalance);
+          }
+        }
+      }
+      progress.update(*simulation, cfg.integer("run.steps"), cfg.number("run.end_time"));
     }
     // The final state, unless the last step wrote it already.
-    if (checkpoint.intervalSteps > 0 && !checkpoint.due(sim.steps()))
-      sim.writeCheckpoint(checkpoint.pathAt(sim.steps()));
+    if (checkpoint.intervalSteps > 0 && !checkpoint.due(simulation->steps()))
+      simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
   } catch (const Error& e) {
     // A failure inside the time loop reaches every rank here together (the solvers raise their
     // checks collectively). Keep the state for inspection, say what happened, exit non-zero.
+    if (!simulation) {  // failed while moving onto new blocks: no state left in memory
+      if (world.isRoot()) std::fprintf(stderr, "coloc: error: re-balancing failed: %s\n", e.what());
+      return kRunFailedStatus;
+    }
     char when[160];
     std::snprintf(when, sizeof when, "the run failed in step %lld (from t = %.9g s)",
-                  sim.steps() + 1, sim.time());
+                  simulation->steps() + 1, simulation->time());
     const std::string message = e.what();
     std::string saved, saveError;
     if (checkpoint.onFailure) {
-      const std::string path = failedCheckpointPath(checkpoint.pathAt(sim.steps() + 1));
+      const std::string path = failedCheckpointPath(checkpoint.pathAt(simulation->steps() + 1));
       try {
-        sim.writeCheckpoint(path, "failed: " + std::string(when) + ": " + message);
+        simulation->writeCheckpoint(path, "failed: " + std::string(when) + ": " + message);
         saved = path;
       } catch (const Error& e2) {
         saveError = e2.what();
@@ -196,8 +219,9 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const double loopWall = MPI_Wtime() - tLoop;
 
   Report report(opts.casePath, cfg.json());
-  report.merge(sim.report(loopWall));
+  report.merge(simulation->report(loopWall));
   report.set("run.setup_s", world.max(setupWall));
+  report.set("partition.rebalances", rebalances);
   report.set("run.total_wall_s", world.max(MPI_Wtime() - t0));
   report.addMemory(world);
   const std::string path = report.write(world, outDir);

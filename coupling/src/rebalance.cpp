@@ -53,8 +53,17 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
   plan.newImbalance = best.imbalance();
   plan.gain = best.maxBlockCost > 0 ? current.maxBlockCost / best.maxBlockCost : 1.0;
   if (plan.gain < cfg.number("partition.rebalance_threshold")) return plan;
+  BalancedLayout even;  // what uniform blocks would give now, for the report
+  {
+    const Decomposition u = Decomposition::uniform(
+        comm, g, Int3{static_cast<int>(fixed[0]), static_cast<int>(fixed[1]),
+                      static_cast<int>(fixed[2])});
+    even.dims = u.dims();
+    even.cuts = u.cuts();
+    evaluateLayout(g, cost, even);
+  }
   Layouts L{Decomposition::fromCuts(comm, g, best.cuts), std::nullopt, "balanced", plan.model,
-            best.imbalance(), 1.0};
+            best.imbalance(), even.imbalance()};
   plan.layouts = std::move(L);
   return plan;
 }
@@ -63,6 +72,7 @@ std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, cons
                                            Layouts layouts, const std::string& scratch) {
   const double t0 = MPI_Wtime(), c0 = threadCpuSeconds();
   Timers timers = sim->timers();
+  const auto start = sim->runStart();
   const Comm& comm = sim->decomposition().comm();
   sim->writeCheckpoint(scratch);
   const bool root = comm.isRoot();
@@ -71,7 +81,7 @@ std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, cons
   next->decomposition().comm().barrier();
   if (root) std::remove(scratch.c_str());
   timers.add(Phase::Rebalance, MPI_Wtime() - t0, threadCpuSeconds() - c0);
-  next->timers() = timers;
+  next->resumeRun(start, timers);
   return next;
 }
 

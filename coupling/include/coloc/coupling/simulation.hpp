@@ -4,10 +4,12 @@
 // timers and the coupling buffers; nothing is global. One coupled step reads as the algorithm
 // (SPEC section 3, ../shared/ARCHITECTURE.md):
 //
+//   waitForSlowestRank()         timed barrier: load imbalance -> sync       (wait)
 //   computeStencils()            particles' kernel cells and weights         (coupling)
 //   sampleFluidForDrag()         eps^n, u^n, grad p^n at the particles       (coupling)
 //   evaluateDrag()               beta_i from the drag law                    (coupling)
 //   depositParticles()           V_p, beta, beta v_p -> cells                (coupling)
+//   waitForSlowestRank()                                                     (wait)
 //   sumDepositsAcrossBlocks()    reverse halo sum over block faces           (inter-physics,
 //   remote) updateFluidCoefficients()    eps^{n+1} = clip(1 - solid), K, K u_p       (coupling)
 //   advanceFluid()               fv::FluidSolver::step                      (fluid)
@@ -135,6 +137,14 @@ class Simulation {
   /// The timed loop starts: timers().beginRun(), and the throughput of report() counts the
   /// steps from here (a restarted run's own steps).
   void beginRun();
+  /// Where the timed loop started (steps, DEM sub-steps) and, for a simulation that takes over
+  /// a run (re-balancing), carrying that start and the timers over.
+  std::array<long long, 2> runStart() const { return {runStartSteps_, runStartSubsteps_}; }
+  void resumeRun(std::array<long long, 2> start, const Timers& timers) {
+    runStartSteps_ = start[0];
+    runStartSubsteps_ = start[1];
+    timers_ = timers;
+  }
   /// The complete state to one HDF5 file, atomically (path.tmp renamed once every rank closed
   /// it): fluid fields and AB2 history, the DEM state (DemSolver::saveState, which forces a
   /// neighbour rebuild: the only effect on the run), the counters, the blocks and `status`
@@ -148,6 +158,7 @@ class Simulation {
  private:
   Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint);
   void restoreCounters(H5File& file);
+  void waitForSlowestRank();
   void gatherParticles();
   void computeStencils();
   void sampleFluidForDrag();

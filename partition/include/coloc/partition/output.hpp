@@ -86,6 +86,8 @@ class OutputWriter {
   OutputWriter(const Decomposition& dec, OutputOptions opt);
 
   const OutputOptions& options() const { return opt_; }
+  /// Writes from now on for the blocks of `dec` (after a re-balance); the series go on.
+  void rebind(const Decomposition& dec) { dec_ = &dec; }
   /// True when `step` is an output step (intervalSteps > 0 and step % intervalSteps == 0).
   bool due(long long step) const;
 
