@@ -77,74 +77,18 @@ inline void cross3(const double* a, const double* b, double* c) {
   c[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/// Force and torque on particle i from one contact.
+/// The contact law for one pair, computed once (Newton's third law).
 ///  n: unit normal from j (or the wall) to i;  delta > 0: overlap;  vr = v_i - v_j;
 ///  wsum = r_i omega_i + r_j omega_j (contact-point rotation, r_j omega_j = 0 for a wall);
 ///  wrel = omega_i - omega_j (rolling resistance);  shear: history (updated when `update`).
-/// Adds the force to F and the torque about i's centre to T; returns |F_n| (for diagnostics).
-template <Model M>
-inline double contactForce(const PairCoeff& c, double dt, bool update, const double* n,
-                           double delta, double Reff, double meff, double ri, const double* vr,
-                           const double* wsum, const double* wrel, double* shear, double* F,
-                           double* T) {
-  double kn, kt, gn, gt;
-  if constexpr (M == Model::HertzMindlin) {
-    const double sq = std::sqrt(Reff * delta);
-    const double Sn = 2.0 * c.Estar * sq, St = 8.0 * c.Gstar * sq;
-    kn = (2.0 / 3.0) * Sn;
-    kt = St;
-    gn = c.dampH * std::sqrt(Sn * meff);
-    gt = c.tOverN * gn;  // = dampH sqrt(S_t m*), one square root fewer
-  } else {
-    kn = c.kn;
-    kt = c.kt;
-    gn = c.dampL * std::sqrt(kn * meff);
-    gt = c.dampL * std::sqrt(kt * meff);
-  }
-  const double vn = dot3(vr, n);
-  const double Fn = kn * delta - gn * vn;
-  double wxn[3];
-  cross3(wsum, n, wxn);
-  const double vt[3] = {vr[0] - vn * n[0] - wxn[0], vr[1] - vn * n[1] - wxn[1],
-                        vr[2] - vn * n[2] - wxn[2]};
-  if (update) {
-    const double sn = dot3(shear, n);
-    for (int k = 0; k < 3; ++k) shear[k] += vt[k] * dt - sn * n[k];
-  }
-  double Ft[3] = {-kt * shear[0], -kt * shear[1], -kt * shear[2]};
-  const double ftMax = c.mu * std::fabs(Fn);
-  const double ft2 = dot3(Ft, Ft);
-  if (ft2 > ftMax * ftMax) {
-    const double ratio = ftMax / std::sqrt(ft2);
-    for (int k = 0; k < 3; ++k) Ft[k] *= ratio;
-    if (update && kt > 0)
-      for (int k = 0; k < 3; ++k) shear[k] = -Ft[k] / kt;
-  } else {
-    for (int k = 0; k < 3; ++k) Ft[k] -= gt * vt[k];
-  }
-  for (int k = 0; k < 3; ++k) F[k] += Fn * n[k] + Ft[k];
-  // torque about i's centre: (-r_i n) x F_t
-  double nxf[3];
-  cross3(n, Ft, nxf);
-  for (int k = 0; k < 3; ++k) T[k] -= ri * nxf[k];
-  if (c.muR > 0) {
-    const double w = std::sqrt(dot3(wrel, wrel));
-    if (w > 0) {
-      const double s = c.muR * Reff * std::fabs(Fn) / w;
-      for (int k = 0; k < 3; ++k) T[k] -= s * wrel[k];
-    }
-  }
-  return std::fabs(Fn);
-}
-
-/// One particle pair, computed once (Newton's third law). The same law as contactForce; the
-/// results are returned instead of accumulated, so that each side adds them in its own canonical
-/// order:  force on i: +Fp, on j: -Fp;  torque on i: -r_i nxft - roll, on j: -r_j nxft + roll
-/// (nxft = n x F_t, roll = the rolling-resistance torque on i, zero when mu_r = 0).
+/// The results are returned instead of accumulated, so that each side adds them in its own
+/// canonical order:  force on i: +Fp, on j: -Fp;  torque on i: -r_i nxft - roll, on j: -r_j nxft +
+/// roll (nxft = n x F_t, roll = the rolling-resistance torque on i, zero when mu_r = 0). Returns
+/// |F_n|.
 template <Model M, bool Rolling = true>
-inline void pairForce(const PairCoeff& c, double dt, bool update, const double* n, double delta,
-                      double Reff, double meff, const double* vr, const double* wsum,
-                      const double* wrel, double* shear, double* Fp, double* nxft, double* roll) {
+inline double pairForce(const PairCoeff& c, double dt, bool update, const double* n, double delta,
+                        double Reff, double meff, const double* vr, const double* wsum,
+                        const double* wrel, double* shear, double* Fp, double* nxft, double* roll) {
   double kn, kt, gn, gt;
   if constexpr (M == Model::HertzMindlin) {
     const double sq = std::sqrt(Reff * delta);
@@ -182,7 +126,7 @@ inline void pairForce(const PairCoeff& c, double dt, bool update, const double* 
   }
   for (int k = 0; k < 3; ++k) Fp[k] = Fn * n[k] + Ft[k];
   cross3(n, Ft, nxft);
-  if constexpr (!Rolling) return;
+  if constexpr (!Rolling) return std::fabs(Fn);
   roll[0] = roll[1] = roll[2] = 0;
   if (c.muR > 0) {
     const double w = std::sqrt(dot3(wrel, wrel));
@@ -191,6 +135,24 @@ inline void pairForce(const PairCoeff& c, double dt, bool update, const double* 
       for (int k = 0; k < 3; ++k) roll[k] = s * wrel[k];
     }
   }
+  return std::fabs(Fn);
+}
+
+/// Force and torque on particle i from one contact (walls, single-sided use): pairForce added
+/// to F and, about i's centre, to T; returns |F_n| (for diagnostics).
+template <Model M>
+inline double contactForce(const PairCoeff& c, double dt, bool update, const double* n,
+                           double delta, double Reff, double meff, double ri, const double* vr,
+                           const double* wsum, const double* wrel, double* shear, double* F,
+                           double* T) {
+  double Fp[3], nxft[3], roll[3];
+  const double fn =
+      pairForce<M>(c, dt, update, n, delta, Reff, meff, vr, wsum, wrel, shear, Fp, nxft, roll);
+  for (int k = 0; k < 3; ++k) F[k] += Fp[k];
+  // torque about i's centre: (-r_i n) x F_t, then rolling resistance
+  for (int k = 0; k < 3; ++k) T[k] -= ri * nxft[k];
+  for (int k = 0; k < 3; ++k) T[k] -= roll[k];
+  return fn;
 }
 
 /// Elastic energy stored in the normal spring at overlap delta.
