@@ -11,9 +11,13 @@ void declareRunConfig(Schema& s) {
            {"coupled", "fluid", "particles", "dummy_dem"});
   s.vec3("gravity", std::array<double, 3>{0, 0, 0},
          "gravitational acceleration (m/s^2), felt by the particles and the fluid");
-  s.integer("run.steps", 10, "number of CFD (coupling) steps; 0: run until run.end_time",
+  s.integer("run.steps", 10,
+            "number of steps: CFD steps (fluid), coupling steps (coupled, dummy_dem), groups of "
+            "max(1, coupling.dem_substeps) DEM steps (particles); 0: run until run.end_time",
             Range::nonNegative());
-  s.number("run.end_time", 0.0, "simulated time to reach (s) when run.steps is 0",
+  s.number("run.end_time", 0.0,
+           "when run.steps is 0, steps are taken until the simulated time reaches or passes "
+           "this (s)",
            Range::nonNegative());
   s.number("run.progress_interval_s", 2.0, "seconds between progress lines on rank 0 (0: off)",
            Range::nonNegative());

@@ -26,7 +26,11 @@ void declareConfig(Schema& s) {
             "adjointly, on the fields sampled at the particles (0: off)",
             Range::nonNegative());
   s.integer("coupling.dem_substeps", 0,
-            "DEM sub-steps per CFD step; 0: the CFD step divided by particles.dt",
+            "DEM steps per step. coupled, dummy_dem: the CFD step is dem_substeps * particles.dt "
+            "(fluid.dt and fluid.adaptive_dt are then not used); 0: the largest whole number of "
+            "particles.dt in the fluid's step (fluid.dt, or the adaptive step), at least 1. "
+            "particles mode: each step is max(1, dem_substeps) DEM steps (0 means one) and "
+            "fluid.dt is ignored",
             Range::nonNegative());
 }
 

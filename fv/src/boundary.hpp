@@ -19,6 +19,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include "coloc/core/config.hpp"
 #include "coloc/partition/decomposition.hpp"
@@ -35,10 +36,47 @@ struct FaceBc {
   double pressure = 0;       // outlet kinematic pressure
 };
 
-/// bc[axis][side]: side 0 = low face, 1 = high face.
-using BoxBc = std::array<std::array<FaceBc, 2>, 3>;
+/// The conditions of the six box faces: each face has its default condition, and
+/// `fluid.patches` may give rectangles of a face their own (inlet, outlet, wall, slip). A cell
+/// next to a face belongs to the last patch of that face that contains its face centre.
+struct BoxBc {
+  std::array<std::array<FaceBc, 2>, 3> face;  // face[axis][side] (side 0 = low, 1 = high)
+  std::vector<FaceBc> patch;                  // the patches' conditions
+  /// Per face, over the global cells of its two tangential axes (ascending axis order, first
+  /// axis fastest): 0 = the face's default, k = patch[k - 1]. Empty: the face is uniform.
+  std::array<std::array<std::vector<int>, 2>, 3> map;
+  Int3 cells{0, 0, 0};  // global cells
+  std::array<std::array<unsigned, 2>, 3> types{};  // per face: bit t set if BcType t occurs
 
-/// Reads fluid.boundary.* and checks it against domain.periodic.* (ConfigError naming the key).
+  static int tangential(int axis, int which) {
+    return which == 0 ? (axis == 0 ? 1 : 0) : (axis == 2 ? 1 : 2);
+  }
+  bool uniform(int axis, int side) const { return map[axis][side].empty(); }
+  /// Code (0 default, k patch k-1) of the cell at global tangential indices (clamped).
+  int code(int axis, int side, int g1, int g2) const;
+  const FaceBc& byCode(int axis, int side, int code) const {
+    return code == 0 ? face[axis][side] : patch[static_cast<std::size_t>(code - 1)];
+  }
+  /// Condition at the face cell whose global tangential indices are g1, g2 (clamped).
+  const FaceBc& at(int axis, int side, int g1, int g2) const {
+    return uniform(axis, side) ? face[axis][side] : byCode(axis, side, code(axis, side, g1, g2));
+  }
+  /// Condition of face (axis, side) next to local cell or face index (i, j, k) of block `dec`
+  /// (the index along `axis` is not used).
+  const FaceBc& atLocal(const Decomposition& dec, int axis, int side, int i, int j, int k) const {
+    if (uniform(axis, side)) return face[axis][side];
+    const int idx[3] = {i, j, k};
+    const int t1 = tangential(axis, 0), t2 = tangential(axis, 1);
+    return at(axis, side, dec.lo()[t1] + idx[t1], dec.lo()[t2] + idx[t2]);
+  }
+  /// Whether any part of face (axis, side) has condition t.
+  bool anyOnFace(int axis, int side, BcType t) const;
+  /// Whether any part of any face has condition t.
+  bool any(BcType t) const;
+};
+
+/// Reads fluid.boundary.* and fluid.patches and checks them against domain.periodic.*
+/// (ConfigError naming the key).
 BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid);
 
 /// Fill the ghosts of face component c at the physical faces of this block (over the whole

@@ -40,11 +40,34 @@ void declareConfig(Schema& s) {
               std::string("condition on the ") + f +
                   " face: auto (periodic on a periodic axis, else no-slip wall), periodic, "
                   "inlet{velocity}, outlet{pressure}, wall{velocity}, slip");
+  {
+    // Patches: a rectangle of a face with its own condition (the rest keeps the face's).
+    std::map<std::string, Schema> patch;
+    for (auto& [type, schema] : boundaryTypes()) {
+      if (type == "auto" || type == "periodic") continue;
+      Schema p = schema;
+      p.string("face", std::nullopt, "the face: xlo, xhi, ylo, yhi, zlo, zhi",
+               {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"});
+      p.numberList("min", std::nullopt,
+                   "lower corner (m) on the face's two tangential axes in axis order (xlo/xhi: "
+                   "y, z; ylo/yhi: x, z; zlo/zhi: x, y)");
+      p.numberList("max", std::nullopt, "upper corner (m), same axes as min");
+      patch[type] = p;
+    }
+    s.list("fluid.patches", patch,
+           "rectangles of a box face with their own condition: {type: inlet|outlet|wall|slip, "
+           "face, min: [a, b], max: [a, b], and the type's keys (velocity, superficial, "
+           "pressure)}; a cell next to the face belongs to the last patch containing its face "
+           "centre, the rest of the face keeps fluid.boundary.<face>");
+  }
   s.number("fluid.dt", 1.0e-3,
-           "time step (s); with fluid.adaptive_dt the first and the largest step",
+           "fluid time step (s); with fluid.adaptive_dt the first and the largest step. "
+           "coupled, dummy_dem: rounded down to a whole number of particles.dt (at least one), "
+           "not used when coupling.dem_substeps > 0; ignored in particles mode",
            Range::positive());
   s.boolean("fluid.adaptive_dt", false,
-            "adapt dt to fluid.cfl and the explicit-viscous limit every step");
+            "adapt dt to fluid.cfl and the explicit-viscous limit every step (coupled: only "
+            "with coupling.dem_substeps = 0, then rounded down to a multiple of particles.dt)");
   s.number("fluid.cfl", 0.5, "target convective CFL number of the adaptive step",
            Range::openClosed(0.0, 10.0));
   s.number("fluid.cfl_max", 1.0,
