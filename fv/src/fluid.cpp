@@ -55,6 +55,10 @@ struct FluidSolver::Impl {
   std::array<HaloPlan, 3> faceHalo;
   // State.
   bool uGhostsFresh = false, coefficientsChanged = true, haveOld = false, ratesStale = false;
+  // A superficial inlet reads eps in the ghost cells next to the face (U / eps of the adjacent
+  // cell, tangential ghosts included): those ghosts must be current when the velocity ghosts are
+  // filled, also when fields() was written outside a step (e.g. the coupling's set-up).
+  bool superficialInlet = false, epsGhostsFresh = false;
   double time = 0, dtOld = 0, matrixDt = -1;
   bool anyK = false;
   long long steps = 0;
@@ -118,6 +122,12 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t) : 
                                                                : Convection::VanLeer;
   bc = boundaryFromConfig(cfg, grid);
   singular = !bc.any(BcType::Outlet);
+  for (int a = 0; a < 3; ++a)
+    for (int s = 0; s < 2; ++s)
+      if (bc.face[a][s].type == BcType::Inlet && bc.face[a][s].superficial)
+        superficialInlet = true;
+  for (const auto& p : bc.patch)
+    if (p.type == BcType::Inlet && p.superficial) superficialInlet = true;
 
   const FieldLayout cl = cellLayout(dec, kGhost);
   f.u = FaceField(dec, kGhost);
@@ -154,6 +164,15 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t) : 
 }
 
 void FluidSolver::Impl::fillGhosts() {
+  if (superficialInlet && !epsGhostsFresh) {
+    {
+      ScopedPhase t(timers, Phase::FluidHalo);
+      cellHalo.gather(f.eps, &timers, Exchange::IntraPhysics);
+    }
+    ScopedPhase t(timers, Phase::FluidBoundary);
+    applyScalarBc(dec, f.eps);
+    epsGhostsFresh = true;
+  }
   {
     ScopedPhase t(timers, Phase::FluidHalo);
     for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
@@ -300,6 +319,7 @@ void FluidSolver::Impl::step(double dt) {
     applyScalarBc(dec, f.epsOld);
     applyScalarBc(dec, f.K);
     for (auto& k : f.KUp) applyScalarBc(dec, k);
+    epsGhostsFresh = true;
   }
   if (!uGhostsFresh) fillGhosts();
 
@@ -544,6 +564,7 @@ FluidSolver::~FluidSolver() = default;
 
 FluidFields& FluidSolver::fields() {
   impl_->uGhostsFresh = false;
+  impl_->epsGhostsFresh = false;
   impl_->ratesStale = true;
   return impl_->f;
 }
@@ -635,6 +656,7 @@ void FluidSolver::restoreState(const FluidCounters& c) {
   applyScalarBc(m.dec, f.K);
   for (auto& k : f.KUp) applyScalarBc(m.dec, k);
   m.uGhostsFresh = false;
+  m.epsGhostsFresh = true;  // gathered and closed above
   m.coefficientsChanged = true;
   m.matrixDt = -1;
   m.time = c.time;
@@ -725,13 +747,13 @@ Json FluidSolver::diagnostics() const {
                  m.dragLocal[1], m.dragLocal[2], m.dVolGrossLocal};
   comm.sumInPlace(std::span<double>(v, 7));
   const double in = v[0], out = v[1], dvol = v[2];
-  // Physical scale of the volume balance (m^3/s): the larger of the fluxes through the boundary,
-  // the gross rate of change of the fluid volume (sum over the cells of |d eps/dt| V_cell) and
-  // max|u| times the largest face area of the box. A closed box (in = out = 0, dV round-off)
-  // then reports round-off, not |dV|/|dV| = 1.
-  const auto& gr = m.dec.grid();
-  const double areaMax = std::max({gr.length[1] * gr.length[2], gr.length[0] * gr.length[2],
-                                   gr.length[0] * gr.length[1]});
+  // Physical scale of the volume balance (m^3/s): the largest of the fluxes through the
+  // boundary, the gross rate of change of the fluid volume (sum over the cells of
+  // |d eps/dt| V_cell) and max|u| times the largest cell-face area (the flux through the
+  // fastest face). A closed box (in = out = 0, dV round-off) then reports round-off, not
+  // |dV|/|dV| = 1.
+  const double vol = m.dec.grid().cellVolume();
+  const double areaMax = std::max({vol / m.h[0], vol / m.h[1], vol / m.h[2]});
   const double scale = std::max({std::fabs(in), std::fabs(out), v[6], m.umaxLast * areaMax});
   const double residual = std::fabs(in - out - dvol);
   const double balance = scale > 0 ? residual / scale : (residual > 0 ? 1.0 : 0.0);
