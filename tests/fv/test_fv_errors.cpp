@@ -54,3 +54,26 @@ TEST(FvErrors, NonFiniteVelocityStops) {
   EXPECT_NE(e.find("fluid step 1: non-finite velocity"), std::string::npos) << e;
   EXPECT_NE(e.find("at cell ("), std::string::npos) << e;
 }
+
+TEST(FvErrors, BadPatchesNameTheKey) {
+  // On a periodic face.
+  std::string e = errorOf(
+      kBox, {R"(fluid.patches=[{"type":"outlet","face":"zhi","min":[0,0],"max":[0.5,0.5]}])"});
+  EXPECT_NE(e.find("fluid.patches[0].face"), std::string::npos) << e;
+  EXPECT_NE(e.find("periodic"), std::string::npos) << e;
+  // Containing no cell face centre (xhi: y cells of 1/6, centres at 1/12, 3/12, ...).
+  e = errorOf(kBox, {R"(fluid.patches=[{"type":"outlet","face":"xhi","min":[0.4,0.3],"max":[0.6,0.7]},
+                                       {"type":"outlet","face":"xhi","min":[0.0,0.0],"max":[0.01,1]}])"});
+  EXPECT_NE(e.find("fluid.patches[1]"), std::string::npos) << e;
+  EXPECT_NE(e.find("no cell face centre"), std::string::npos) << e;
+  // Three coordinates instead of two; max below min.
+  e = errorOf(kBox,
+              {R"(fluid.patches=[{"type":"outlet","face":"xlo","min":[0,0,0],"max":[1,1]}])"});
+  EXPECT_NE(e.find("fluid.patches[0].min"), std::string::npos) << e;
+  e = errorOf(kBox, {R"(fluid.patches=[{"type":"outlet","face":"ylo","min":[0.5,0],"max":[0.2,1]}])"});
+  EXPECT_NE(e.find("fluid.patches[0].max"), std::string::npos) << e;
+  // A wall patch that moves normally to its face.
+  e = errorOf(kBox, {R"(fluid.patches=[{"type":"wall","face":"ylo","min":[0,0],"max":[1,1],
+                                        "velocity":[0,1,0]}])"});
+  EXPECT_NE(e.find("fluid.patches[0].velocity"), std::string::npos) << e;
+}
