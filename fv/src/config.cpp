@@ -82,7 +82,10 @@ void declareConfig(Schema& s) {
            "explicit terms: ab2 (Adams-Bashforth 2, variable step) or euler (1st order)",
            {"ab2", "euler"});
   s.string("fluid.pressure.solver", "pfmg", "preconditioner of hypre Struct PCG", {"pfmg", "smg"});
-  s.number("fluid.pressure.tol", 1.0e-8, "relative residual tolerance (2-norm) of PCG",
+  s.number("fluid.pressure.tol", 1.0e-8,
+           "PCG stops when ||r||_2 <= tol * max(||b||_2, ||s||_2), s the per-cell flux scale "
+           "sum_f |eps_f u*_f|/h + |d eps/dt| (the divergence left is below tol of the fluxes "
+           "through the cells)",
            Range::openClosed(0.0, 1.0));
   s.integer("fluid.pressure.max_iter", 200, "PCG iteration cap", Range::atLeast(1));
   s.number("fluid.steady_tol", 0.0,
