@@ -116,7 +116,8 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
           std::vector<char> seen(bc.patch.size() + 1, 0);
           for (int c : m) seen[static_cast<std::size_t>(c)] = 1;
           for (std::size_t c = 0; c < seen.size(); ++c)
-            if (seen[c]) t |= 1u << static_cast<unsigned>(bc.byCode(d, s, static_cast<int>(c)).type);
+            if (seen[c])
+              t |= 1u << static_cast<unsigned>(bc.byCode(d, s, static_cast<int>(c)).type);
         }
         bc.types[d][s] = t;
       }
@@ -140,9 +141,9 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
     for (const char* which : {"min", "max"}) {
       const Json& v = j.at(which);
       if (v.size() != 2)
-        throw ConfigError(key + "." + which,
-                          std::string("give two coordinates (m), on the ") + kAxis[t[0]] +
-                              " and " + kAxis[t[1]] + " axes of face " + faceName);
+        throw ConfigError(key + "." + which, std::string("give two coordinates (m), on the ") +
+                                                 kAxis[t[0]] + " and " + kAxis[t[1]] +
+                                                 " axes of face " + faceName);
     }
     for (int e = 0; e < 2; ++e) {
       lo[e] = j.at("min")[e].get<double>();

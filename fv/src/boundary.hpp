@@ -45,7 +45,7 @@ struct BoxBc {
   /// Per face, over the global cells of its two tangential axes (ascending axis order, first
   /// axis fastest): 0 = the face's default, k = patch[k - 1]. Empty: the face is uniform.
   std::array<std::array<std::vector<int>, 2>, 3> map;
-  Int3 cells{0, 0, 0};  // global cells
+  Int3 cells{0, 0, 0};                             // global cells
   std::array<std::array<unsigned, 2>, 3> types{};  // per face: bit t set if BcType t occurs
 
   static int tangential(int axis, int which) {

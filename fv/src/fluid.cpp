@@ -124,8 +124,7 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t) : 
   singular = !bc.any(BcType::Outlet);
   for (int a = 0; a < 3; ++a)
     for (int s = 0; s < 2; ++s)
-      if (bc.face[a][s].type == BcType::Inlet && bc.face[a][s].superficial)
-        superficialInlet = true;
+      if (bc.face[a][s].type == BcType::Inlet && bc.face[a][s].superficial) superficialInlet = true;
   for (const auto& p : bc.patch)
     if (p.type == BcType::Inlet && p.superficial) superficialInlet = true;
 

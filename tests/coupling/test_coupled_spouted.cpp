@@ -106,10 +106,11 @@ TEST_P(Spouted, JetPatchSameAsSerial) {
     EXPECT_LE(worstBalance, 1e-9);
     EXPECT_LE(par.momentumBalance(), 1e-12);
     if (world.isRoot())
-      std::printf("%s, %d ranks: largest upward particle velocity %.4f m/s, contacts per "
-                  "particle %.2f, worst volume balance %.2e\n",
-                  GetParam().c_str(), world.size(), vzmax,
-                  r["particles"]["contacts_per_particle"].get<double>(), worstBalance);
+      std::printf(
+          "%s, %d ranks: largest upward particle velocity %.4f m/s, contacts per "
+          "particle %.2f, worst volume balance %.2e\n",
+          GetParam().c_str(), world.size(), vzmax,
+          r["particles"]["contacts_per_particle"].get<double>(), worstBalance);
   }
   MPI_Comm_free(&selfRaw);
 }

@@ -105,18 +105,19 @@ TEST(FvPatches, PatchInletOutletBalanceAndSerialEqual) {
 
   double worst = 0;
   for (int c = 0; c < 3; ++c)
-    worst = std::max(worst, maxRelDiff(world, par.dec, f.u[c], ser.dec,
-                                       std::as_const(ser.solver).fields().u[c],
-                                       fvtest::ownedFaces(par.dec, c)));
-  worst = std::max(worst, maxRelDiff(world, par.dec, f.p, ser.dec,
-                                     std::as_const(ser.solver).fields().p,
-                                     IndexBox{{0, 0, 0}, par.dec.cells()}));
+    worst = std::max(
+        worst, maxRelDiff(world, par.dec, f.u[c], ser.dec, std::as_const(ser.solver).fields().u[c],
+                          fvtest::ownedFaces(par.dec, c)));
+  worst =
+      std::max(worst, maxRelDiff(world, par.dec, f.p, ser.dec, std::as_const(ser.solver).fields().p,
+                                 IndexBox{{0, 0, 0}, par.dec.cells()}));
   EXPECT_LE(worst, 1e-10) << "parallel vs serial";
   if (world.isRoot())
-    std::printf("%d ranks: inflow %.15g (patch area %.15g), outflow %.6g, worst balance %.2e, "
-                "worst relative difference to serial %.2e\n",
-                world.size(), d["fluid"]["inflow"].get<double>(), kInletArea,
-                d["fluid"]["outflow"].get<double>(), worstBalance, worst);
+    std::printf(
+        "%d ranks: inflow %.15g (patch area %.15g), outflow %.6g, worst balance %.2e, "
+        "worst relative difference to serial %.2e\n",
+        world.size(), d["fluid"]["inflow"].get<double>(), kInletArea,
+        d["fluid"]["outflow"].get<double>(), worstBalance, worst);
 }
 
 TEST(FvPatches, ClosedBoxBalance) {
