@@ -175,9 +175,15 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
     if (file) readFluidState(*file, "/fluid", dec_, *fluid_);
   }
   if (mode_ != RunMode::FluidOnly) {
-    dem_ = file ? std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
-                                                   readDemState(*file, "/particles"))
-                : std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
+    if (file) {
+      dem::DemState state = readDemState(*file, "/particles");
+      validateDemState(dec_.comm(), state, dec_.grid(), cfg.at("particles.materials").size(),
+                       *checkpoint);
+      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
+                                              std::move(state));
+    } else {
+      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
+    }
     if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
   }
   if (file) {

@@ -14,6 +14,11 @@
 #                  the last good one kept, and a restart from the failed one refused
 #   badrestart     --restart with a missing, a corrupt, another grid's and a failed checkpoint:
 #                  a clear error, non-zero exit, no hang
+#   damaged        --restart from a checkpoint with one flipped bit in the ids, masses, positions,
+#                  contact holders or the fluid pressure (Fletcher32 checksum), or rewritten with
+#                  valid checksums but impossible values (a duplicate id, a negative mass, a
+#                  particle outside the box, a contact held by no particle, a NaN pressure):
+#                  refused naming the file and dataset, exit 2 on every rank, no hang
 set -u
 test=$1 coloc=$2 mpiexec=$3 py=$4 case=$5 work=$6
 shift 6
@@ -147,6 +152,34 @@ EOF
     "$expect" "it was written in run.mode coupled" -- "$mpiexec" -n 2 --bind-to none \
       "$coloc" run "$case" --out "$work/x" --quiet --set run.mode=fluid \
       --restart "$work/a/checkpoint.h5" || fail "restart in another mode"
+    ;;
+  damaged)
+    run 2 "$work/a" --set run.steps=4 --set output.checkpoint_interval=4 ||
+      { cat "$work/a.log"; fail "run failed"; }
+    good=$work/a/checkpoint.h5
+    damage() {  # damage EXPECTED MODE DATASET ARG
+      local bad=$work/bad.h5
+      "$py" "$here/damage_checkpoint.py" "$good" "$bad" "$2" "$3" "$4" || fail "damaging $3"
+      "$expect" "$1" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out "$work/x" \
+        --quiet --restart "$bad" > "$work/damaged.log" 2>&1
+      local rc=$?
+      cat "$work/damaged.log"
+      [[ $rc -eq 0 ]] || fail "damaged $3 ($2) not refused as expected"
+      grep -q "^PASS: exit 2 with" "$work/damaged.log" ||
+        fail "damaged $3: exit status is not 2"
+    }
+    for ds in particles/id particles/mass particles/x particles/contacts/holder fluid/p; do
+      damage "$work/bad.h5:/$ds: H5Dread failed" flip "$ds" 13
+      damage "Fletcher32 checksum" flip "$ds" 3
+    done
+    damage "is damaged: /particles/id: id" set particles/id "a[3] = a[4]"
+    damage "is damaged: /particles/id: particle id -" set particles/id "a[7] = -5"
+    damage "/particles/mass: particle id" set particles/mass "a[5] = -3.7e8"
+    damage "/particles/radius: particle id" set particles/radius "a[2] = np.nan"
+    damage "/particles/x: particle id" set particles/x "a[9, 2] = 1.0"
+    damage "/particles/contacts/holder: row 0" set particles/contacts/holder "a[0] = 99999"
+    damage "/fluid/p: value nan" set fluid/p "a[1, 2, 3] = np.nan"
+    damage "/fluid/eps: value" set fluid/eps "a[0, 0, 0] = -0.5"
     ;;
   *) fail "unknown test $test" ;;
 esac
