@@ -9,6 +9,7 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/run_config.hpp"
+#include "coloc/fv/fluid.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -79,6 +80,7 @@ void checkTimeSteps(const Config& cfg, std::vector<std::string>& notes) {
 
 void checkBoundaries(const Config& cfg, std::vector<std::string>& notes) {
   if (runMode(cfg) == RunMode::ParticlesOnly) return;
+  fv::checkBoundaryConfig(cfg, gridFromConfig(cfg));  // types and periodicity first
   std::string inlet;
   bool outlet = false;
   const char* const periodicKey[3] = {"domain.periodic.x", "domain.periodic.y",
