@@ -103,6 +103,39 @@ int checkCase(const CheckOptions& opts) {
               cfg.string("name").c_str(), opts.casePath.c_str(), runModeName(mode), g.cells[0],
               g.cells[1], g.cells[2], g.cellCount(), g.length[0], g.length[1], g.length[2], N);
 
+  // Memory first (nothing allocated yet): the run's own check (largest uniform block, mean
+  // particles a rank), with N ranks on this node.
+  std::string how;
+  const double limit = coupling::memoryLimitPerRank(cfg, N, &how);
+  const auto est = coupling::estimateMemory(cfg, coupling::largestUniformBlock(cfg, N),
+                                            coupling::sourceParticleCount(cfg) / N);
+  std::printf("coloc check: memory estimate a rank: %s (fluid and pressure solver %s, coupling "
+              "%s, particles %s, base %s)\n",
+              coupling::bytesText(est.total()).c_str(), coupling::bytesText(est.fluidBytes).c_str(),
+              coupling::bytesText(est.couplingBytes).c_str(),
+              coupling::bytesText(est.particleBytes).c_str(),
+              coupling::bytesText(est.baseBytes).c_str());
+  std::printf("coloc check: this machine offers %s a rank (%s, all %d ranks on this node)\n",
+              limit > 0 ? coupling::bytesText(limit).c_str() : "?", how.c_str(), N);
+  if (limit > 0 && est.total() > limit) {
+    std::fprintf(stderr,
+                 "coloc: error: domain.cells, particles.sources: the case needs about %s a rank, "
+                 "the machine offers %s (%s): a run on %d rank(s) here would be refused\n",
+                 coupling::bytesText(est.total()).c_str(), coupling::bytesText(limit).c_str(),
+                 how.c_str(), N);
+    return 2;
+  }
+  // The per-cell cost arrays of the layouts (what the balanced run itself builds on every rank)
+  // must fit in this one process too.
+  const double perCellBytes = 3.0 * 8.0 * static_cast<double>(g.cellCount());
+  if (limit > 0 && perCellBytes > 0.5 * limit * N) {
+    std::printf("coloc check: %lld cells: the per-cell layouts (%s) are not computed in one "
+                "process; nothing was run\n",
+                g.cellCount(), coupling::bytesText(perCellBytes).c_str());
+    for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
+    return 0;
+  }
+
   // The particles as the run generates them (deterministic, the same on any rank count), on one
   // block here; this also runs the DEM's own checks (overlaps, particles outside the box, dt).
   std::vector<double> particlesPerCell(static_cast<std::size_t>(g.cellCount()), 0.0);
@@ -223,19 +256,9 @@ int checkCase(const CheckOptions& opts) {
   std::printf("  (* the case's partition.strategy; imbalance: largest / mean block cost with "
               "partition.cost.*)\n\n");
 
-  // Memory: the run's own check (largest uniform block, mean particles a rank), N ranks here.
-  std::string how;
-  const double limit = coupling::memoryLimitPerRank(cfg, N, &how);
-  const auto est = coupling::estimateMemory(cfg, coupling::largestUniformBlock(cfg, N),
-                                            coupling::sourceParticleCount(cfg) / N);
-  std::printf("coloc check: memory estimate a rank: %s (fluid and pressure solver %s, coupling "
-              "%s, particles %s, base %s); busiest rank of the chosen layout %s\n",
-              coupling::bytesText(est.total()).c_str(), coupling::bytesText(est.fluidBytes).c_str(),
-              coupling::bytesText(est.couplingBytes).c_str(),
-              coupling::bytesText(est.particleBytes).c_str(),
-              coupling::bytesText(est.baseBytes).c_str(), coupling::bytesText(caseMem).c_str());
-  std::printf("coloc check: this machine offers %s a rank (%s, all %d ranks on this node)\n",
-              limit > 0 ? coupling::bytesText(limit).c_str() : "?", how.c_str(), N);
+  std::printf("coloc check: memory of the busiest rank of the case's layout (its particles, "
+              "its block): %s\n",
+              coupling::bytesText(caseMem).c_str());
 
   // Time-step limits.
   const auto& mats = cfg.at("particles.materials");
@@ -306,14 +329,6 @@ int checkCase(const CheckOptions& opts) {
   }
   for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
 
-  if (limit > 0 && est.total() > limit) {
-    std::fprintf(stderr,
-                 "coloc: error: domain.cells, particles.sources: the case needs about %s a rank, "
-                 "the machine offers %s (%s): a run on %d rank(s) here would be refused\n",
-                 coupling::bytesText(est.total()).c_str(), coupling::bytesText(limit).c_str(),
-                 how.c_str(), N);
-    return 2;
-  }
   const Plan* chosen = nullptr;
   for (const Plan& p : plans)
     if (p.strategy == strategy) chosen = &p;
