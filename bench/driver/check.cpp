@@ -98,10 +98,11 @@ int checkCase(const CheckOptions& opts) {
   if (N < 1) throw ConfigError("--ranks", "must be at least 1");
   const RunMode mode = runMode(cfg);
   const std::string strategy = cfg.string("partition.strategy");
-  std::printf("coloc check: case '%s' (%s), mode %s, %d x %d x %d = %lld cells, box %g x %g x %g m, "
-              "%d rank(s)\n",
-              cfg.string("name").c_str(), opts.casePath.c_str(), runModeName(mode), g.cells[0],
-              g.cells[1], g.cells[2], g.cellCount(), g.length[0], g.length[1], g.length[2], N);
+  std::printf(
+      "coloc check: case '%s' (%s), mode %s, %d x %d x %d = %lld cells, box %g x %g x %g m, "
+      "%d rank(s)\n",
+      cfg.string("name").c_str(), opts.casePath.c_str(), runModeName(mode), g.cells[0], g.cells[1],
+      g.cells[2], g.cellCount(), g.length[0], g.length[1], g.length[2], N);
 
   // Memory first (nothing allocated yet): the run's own check (largest uniform block, mean
   // particles a rank), with N ranks on this node.
@@ -109,12 +110,12 @@ int checkCase(const CheckOptions& opts) {
   const double limit = coupling::memoryLimitPerRank(cfg, N, &how);
   const auto est = coupling::estimateMemory(cfg, coupling::largestUniformBlock(cfg, N),
                                             coupling::sourceParticleCount(cfg) / N);
-  std::printf("coloc check: memory estimate a rank: %s (fluid and pressure solver %s, coupling "
-              "%s, particles %s, base %s)\n",
-              coupling::bytesText(est.total()).c_str(), coupling::bytesText(est.fluidBytes).c_str(),
-              coupling::bytesText(est.couplingBytes).c_str(),
-              coupling::bytesText(est.particleBytes).c_str(),
-              coupling::bytesText(est.baseBytes).c_str());
+  std::printf(
+      "coloc check: memory estimate a rank: %s (fluid and pressure solver %s, coupling "
+      "%s, particles %s, base %s)\n",
+      coupling::bytesText(est.total()).c_str(), coupling::bytesText(est.fluidBytes).c_str(),
+      coupling::bytesText(est.couplingBytes).c_str(),
+      coupling::bytesText(est.particleBytes).c_str(), coupling::bytesText(est.baseBytes).c_str());
   std::printf("coloc check: this machine offers %s a rank (%s, all %d ranks on this node)\n",
               limit > 0 ? coupling::bytesText(limit).c_str() : "?", how.c_str(), N);
   if (limit > 0 && est.total() > limit) {
@@ -129,9 +130,10 @@ int checkCase(const CheckOptions& opts) {
   // must fit in this one process too.
   const double perCellBytes = 3.0 * 8.0 * static_cast<double>(g.cellCount());
   if (limit > 0 && perCellBytes > 0.5 * limit * N) {
-    std::printf("coloc check: %lld cells: the per-cell layouts (%s) are not computed in one "
-                "process; nothing was run\n",
-                g.cellCount(), coupling::bytesText(perCellBytes).c_str());
+    std::printf(
+        "coloc check: %lld cells: the per-cell layouts (%s) are not computed in one "
+        "process; nothing was run\n",
+        g.cellCount(), coupling::bytesText(perCellBytes).c_str());
     for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
     return 0;
   }
@@ -180,7 +182,8 @@ int checkCase(const CheckOptions& opts) {
   } catch (const Error& e) {
     uniformError = e.what();
   }
-  const CostModel caseModel{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
+  const CostModel caseModel{cfg.number("partition.cost.cell"),
+                            cfg.number("partition.cost.particle")};
   std::vector<double> caseCost(particlesPerCell.size());
   for (std::size_t c = 0; c < caseCost.size(); ++c)
     caseCost[c] = caseModel.perCell + caseModel.perParticle * particlesPerCell[c];
@@ -209,9 +212,10 @@ int checkCase(const CheckOptions& opts) {
     plans.push_back(std::move(p));
   }
   if (cfg.integer("partition.calibrate_steps") > 0)
-    std::printf("coloc check: partition.calibrate_steps: the run measures the cost weights first; "
-                "shown here with partition.cost.cell = %g, partition.cost.particle = %g\n",
-                caseModel.perCell, caseModel.perParticle);
+    std::printf(
+        "coloc check: partition.calibrate_steps: the run measures the cost weights first; "
+        "shown here with partition.cost.cell = %g, partition.cost.particle = %g\n",
+        caseModel.perCell, caseModel.perParticle);
 
   std::printf("\n  %-12s %-9s %-9s %-20s %-20s %-10s %s\n", "strategy", "fluid", "DEM",
               "cells/rank", "particles/rank", "imbalance", "memory/rank (max)");
@@ -219,14 +223,15 @@ int checkCase(const CheckOptions& opts) {
   for (const Plan& p : plans) {
     const bool chosen = p.strategy == strategy;
     if (!p.error.empty()) {
-      std::printf("%s %-12s cannot lay out this case: %s\n", chosen ? "*" : " ",
-                  p.strategy.c_str(), p.error.c_str());
+      std::printf("%s %-12s cannot lay out this case: %s\n", chosen ? "*" : " ", p.strategy.c_str(),
+                  p.error.c_str());
       continue;
     }
     const auto cells = blockCells(p.fluidCuts);
     const auto parts = blockSums(g, p.particleCuts, particlesPerCell);
     const auto cost = blockSums(g, p.fluidCuts, caseCost);
-    const double avg = std::accumulate(cost.begin(), cost.end(), 0.0) / static_cast<double>(cost.size());
+    const double avg =
+        std::accumulate(cost.begin(), cost.end(), 0.0) / static_cast<double>(cost.size());
     const double imb = avg > 0 ? *std::max_element(cost.begin(), cost.end()) / avg : 1.0;
     double mem = 0;
     for (int r = 0; r < N; ++r)
@@ -239,8 +244,8 @@ int checkCase(const CheckOptions& opts) {
     std::snprintf(fdims, sizeof fdims, "%dx%dx%d", fd[0], fd[1], fd[2]);
     std::snprintf(pdims, sizeof pdims, "%dx%dx%d", pd[0], pd[1], pd[2]);
     std::printf("%s %-12s %-9s %-9s %-20s %-20s %-10.3f %s\n", chosen ? "*" : " ",
-                p.strategy.c_str(), fdims, pdims, minMax(cells).c_str(), minMax(parts).c_str(),
-                imb, coupling::bytesText(mem).c_str());
+                p.strategy.c_str(), fdims, pdims, minMax(cells).c_str(), minMax(parts).c_str(), imb,
+                coupling::bytesText(mem).c_str());
     if (opts.verbose) {
       for (int a = 0; a < 3; ++a) {
         std::printf("      cuts %c:", "xyz"[a]);
@@ -253,12 +258,14 @@ int checkCase(const CheckOptions& opts) {
       }
     }
   }
-  std::printf("  (* the case's partition.strategy; imbalance: largest / mean block cost with "
-              "partition.cost.*)\n\n");
+  std::printf(
+      "  (* the case's partition.strategy; imbalance: largest / mean block cost with "
+      "partition.cost.*)\n\n");
 
-  std::printf("coloc check: memory of the busiest rank of the case's layout (its particles, "
-              "its block): %s\n",
-              coupling::bytesText(caseMem).c_str());
+  std::printf(
+      "coloc check: memory of the busiest rank of the case's layout (its particles, "
+      "its block): %s\n",
+      coupling::bytesText(caseMem).c_str());
 
   // Time-step limits.
   const auto& mats = cfg.at("particles.materials");
@@ -266,9 +273,9 @@ int checkCase(const CheckOptions& opts) {
     const bool hertz = cfg.string("particles.contact_model") == "hertz_mindlin";
     double tLim = std::numeric_limits<double>::infinity(), tHertz = tLim;
     // impact speed: the fastest of the inlets, the initial velocities and a fall over the box
-    double vRef = std::sqrt(2.0 * std::hypot(cfg.vec3("gravity")[0], cfg.vec3("gravity")[1],
-                                             cfg.vec3("gravity")[2]) *
-                            std::max({g.length[0], g.length[1], g.length[2]}));
+    double vRef = std::sqrt(
+        2.0 * std::hypot(cfg.vec3("gravity")[0], cfg.vec3("gravity")[1], cfg.vec3("gravity")[2]) *
+        std::max({g.length[0], g.length[1], g.length[2]}));
     for (const auto& s : cfg.at("particles.sources")) {
       const auto& v = s.at("velocity");
       vRef = std::max(vRef, std::hypot(v[0].get<double>(), v[1].get<double>(), v[2].get<double>()) +
@@ -288,10 +295,11 @@ int checkCase(const CheckOptions& opts) {
         tLim = std::min(tLim, M_PI * std::sqrt(0.5 * mass / cfg.number("particles.linear.kn")));
       }
     }
-    std::printf("coloc check: DEM: particles.dt = %g s = %.3g of the %s %.3g s (limit "
-                "particles.dt_fraction = %g)",
-                demDt, demDt / tLim, hertz ? "Rayleigh time" : "linear collision time", tLim,
-                cfg.number("particles.dt_fraction"));
+    std::printf(
+        "coloc check: DEM: particles.dt = %g s = %.3g of the %s %.3g s (limit "
+        "particles.dt_fraction = %g)",
+        demDt, demDt / tLim, hertz ? "Rayleigh time" : "linear collision time", tLim,
+        cfg.number("particles.dt_fraction"));
     if (hertz && std::isfinite(tHertz))
       std::printf("; Hertz contact time at %.3g m/s: %.3g s = %.0f DEM steps", vRef, tHertz,
                   tHertz / demDt);
@@ -316,16 +324,18 @@ int checkCase(const CheckOptions& opts) {
     if ((mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0)
       dt = static_cast<double>(sub) * demDt;
     const double nu = cfg.number("fluid.nu");
-    std::printf("coloc check: CFD: step %g s%s, smallest cell %g m, reference speed %g m/s: CFL "
-                "%.3g (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
-                dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, u * dt / h,
-                cfg.number("fluid.cfl_max"), nu * dt / (h * h));
+    std::printf(
+        "coloc check: CFD: step %g s%s, smallest cell %g m, reference speed %g m/s: CFL "
+        "%.3g (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
+        dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, u * dt / h,
+        cfg.number("fluid.cfl_max"), nu * dt / (h * h));
     if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
       std::printf(", %.0f DEM sub-steps a CFD step", dt / demDt);
     std::printf("\n");
     if (u * dt / h > cfg.number("fluid.cfl_max"))
-      std::printf("coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run would "
-                  "stop at its first steps (lower fluid.dt or use fluid.adaptive_dt)\n");
+      std::printf(
+          "coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run would "
+          "stop at its first steps (lower fluid.dt or use fluid.adaptive_dt)\n");
   }
   for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
 

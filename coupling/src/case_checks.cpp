@@ -53,16 +53,17 @@ void checkTimeSteps(const Config& cfg, std::vector<std::string>& notes) {
   if (sub > 0) {
     const double step = static_cast<double>(sub) * dtp;
     if (adaptive || std::fabs(step - dtf) > 1e-9 * step)
-      notes.push_back("coupling.dem_substeps = " + std::to_string(sub) +
-                      ": every CFD step is " + std::to_string(sub) + " x particles.dt = " +
-                      num(step) + " s; fluid.dt = " + num(dtf) + " s" +
+      notes.push_back("coupling.dem_substeps = " + std::to_string(sub) + ": every CFD step is " +
+                      std::to_string(sub) + " x particles.dt = " + num(step) +
+                      " s; fluid.dt = " + num(dtf) + " s" +
                       (adaptive ? " and fluid.adaptive_dt are" : " is") + " not used");
     return;
   }
   if (adaptive) {
-    notes.push_back("fluid.adaptive_dt: each CFD step is the fluid's step rounded down to a "
-                    "whole number of particles.dt = " +
-                    num(dtp) + " s (at least one)");
+    notes.push_back(
+        "fluid.adaptive_dt: each CFD step is the fluid's step rounded down to a "
+        "whole number of particles.dt = " +
+        num(dtp) + " s (at least one)");
     return;
   }
   const double ratio = dtf / dtp;
@@ -87,7 +88,8 @@ void checkBoundaries(const Config& cfg, std::vector<std::string>& notes) {
                                       "domain.periodic.z"};
   for (int i = 0; i < 6; ++i) {
     const char* f = kFaces[i];
-    const std::string type = cfg.at(std::string("fluid.boundary.") + f).at("type").get<std::string>();
+    const std::string type =
+        cfg.at(std::string("fluid.boundary.") + f).at("type").get<std::string>();
     // (an inlet on a periodic face is refused with its own message when the fluid is built)
     if (type == "inlet" && inlet.empty() && !cfg.boolean(periodicKey[i / 2])) inlet = f;
     if (type == "outlet") outlet = true;
@@ -145,7 +147,8 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
   m.baseBytes = kBaseBytes;
   const double g = static_cast<double>(m.ghostedCells);
   if (mode != RunMode::ParticlesOnly) m.fluidBytes = kFluidBytesPerCell * g;
-  if (mode == RunMode::Coupled || mode == RunMode::DummyDem) m.couplingBytes = kCouplingBytesPerCell * g;
+  if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
+    m.couplingBytes = kCouplingBytesPerCell * g;
   m.particleBytes = kParticleBytes * m.particles;
   return m;
 }
