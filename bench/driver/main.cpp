@@ -1,7 +1,8 @@
 // coloc — the command-line driver.
 //
 //   coloc run CASE.json [--set key.path=value ...] [--out DIR] [--restart CHECKPOINT.h5]
-//   coloc keys            every case-file key, its type, default, range and meaning
+//   coloc keys [PREFIX]   every case-file key (or those under PREFIX): type, default, range, meaning
+//   coloc check CASE.json [--ranks N] [--set ...]   validate, show layouts/memory/time steps
 //   coloc --help
 //
 // Errors in the input are found identically on every rank: rank 0 prints one message naming the
@@ -14,6 +15,7 @@
 
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
+#include "check.hpp"
 #include "run.hpp"
 
 int main(int argc, char** argv) {
@@ -38,7 +40,22 @@ int main(int argc, char** argv) {
                   "continue from this checkpoint (output.checkpoint_*) instead of the case's "
                   "initial condition, on any rank count; run.steps/run.end_time count from the "
                   "start of the original run");
-  app.add_subcommand("keys", "list every case-file key with type, default, range and meaning");
+  std::string keysPrefix;
+  auto* keys =
+      app.add_subcommand("keys", "list every case-file key with type, default, range and meaning");
+  keys->add_option("prefix", keysPrefix,
+                   "only the keys under this path, e.g. particles.sources or fluid.dt");
+  coloc::CheckOptions check;
+  auto* checkCmd = app.add_subcommand(
+      "check", "validate a case and print the layout each partition strategy would choose for N "
+               "ranks, cells and particles a rank, the memory estimate and the time-step limits; "
+               "runs nothing, in one process (exit 0: valid, 2: a run would be refused)");
+  checkCmd->add_option("case", check.casePath, "case file (JSON, // comments allowed)")->required();
+  checkCmd->add_option("--ranks", check.ranks, "rank count to lay the case out for (default 1)");
+  checkCmd->add_option("--set", check.overrides, "override a case key (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+  checkCmd->add_flag("--cuts", check.verbose, "print every strategy's cuts");
 
   try {
     app.parse(argc, argv);
@@ -55,8 +72,27 @@ int main(int argc, char** argv) {
 
   try {
     if (app.got_subcommand("keys")) {
-      if (world.isRoot()) std::cout << coloc::describeKeys();
+      const std::string text = coloc::describeKeys(keysPrefix);  // same verdict on every rank
+      if (world.isRoot()) std::cout << (keysPrefix.empty() ? "" : "Case-file keys under '" +
+                                                                       keysPrefix + "':\n")
+                                    << text;
       return 0;
+    }
+    if (app.got_subcommand("check")) {
+      // One process does the work (no mpirun needed); under mpirun the other ranks wait.
+      int status = 0;
+      std::string err;
+      if (world.isRoot()) {
+        try {
+          status = coloc::checkCase(check);
+        } catch (const coloc::Error& e) {
+          err = e.what();
+          status = 2;
+        }
+        if (!err.empty()) std::fprintf(stderr, "coloc: error: %s\n", err.c_str());
+        std::fflush(stdout);
+      }
+      return world.max(status);
     }
     return coloc::runCase(world, opts);
   } catch (const coloc::Error& e) {

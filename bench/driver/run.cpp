@@ -8,6 +8,7 @@
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/report.hpp"
+#include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
 
@@ -119,6 +120,11 @@ std::string describeKeys() {
 int runCase(const Comm& world, const RunOptions& opts) {
   const double t0 = MPI_Wtime();
   const Config cfg = Config::load(world, opts.casePath, opts.overrides, coupling::caseSchema());
+  // Whole-case checks and the memory estimate, before anything large is allocated.
+  const std::vector<std::string> notes = coupling::checkCase(cfg);
+  coupling::checkMemory(world, cfg);
+  if (world.isRoot())
+    for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
   const std::string outDir = opts.outDir.empty()
                                  ? (std::filesystem::path("out") / cfg.string("name")).string()
                                  : opts.outDir;
@@ -222,6 +228,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
   report.merge(simulation->report(loopWall));
   report.set("run.setup_s", world.max(setupWall));
   report.set("partition.rebalances", rebalances);
+  report.set("run.notes", notes);
   report.set("run.total_wall_s", world.max(MPI_Wtime() - t0));
   report.addMemory(world);
   const std::string path = report.write(world, outDir);

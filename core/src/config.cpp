@@ -1,8 +1,13 @@
 #include "coloc/core/config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
+#include <limits>
+#include <set>
 #include <sstream>
 
 namespace coloc {
@@ -84,6 +89,44 @@ bool isIntegral(const Json& v) {
   return std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 9.0e15;
 }
 
+/// The value of an integer key, or a ConfigError naming it: never a wrapped value. Integers are
+/// 64-bit (signed); a number written with a fraction or exponent is accepted while it is an
+/// exact whole number below 2^53. `bits` is 32 for the keys held in an int (list entries).
+long long integerOf(const std::string& path, const Json& v, int bits = 64) {
+  const long long maxVal = bits == 32 ? 2147483647LL : std::numeric_limits<long long>::max();
+  const char* typeText = bits == 32 ? "a 32-bit integer" : "a 64-bit integer";
+  auto tooLarge = [&](const std::string& text) {
+    return ConfigError(path, "value " + text + " is beyond what " + std::string(typeText) +
+                                 " holds (at most " + std::to_string(maxVal) + ")");
+  };
+  if (!isNumber(v) || !isIntegral(v)) {
+    if (v.is_number_float()) {
+      const double d = v.get<double>();
+      if (std::isfinite(d) && d == std::floor(d)) {
+        std::ostringstream os;
+        os << d;
+        if (std::fabs(d) >= static_cast<double>(maxVal)) throw tooLarge(os.str());
+        throw ConfigError(path, "value " + os.str() +
+                                    " is a whole number too large to be exact as written; "
+                                    "write it as a plain integer");
+      }
+    }
+    throw ConfigError(path, "expected an integer, got " + typeName(v));
+  }
+  long long n = 0;
+  if (v.is_number_unsigned()) {
+    const auto u = v.get<std::uint64_t>();
+    if (u > static_cast<std::uint64_t>(maxVal)) throw tooLarge(std::to_string(u));
+    n = static_cast<long long>(u);
+  } else if (v.is_number_integer()) {
+    n = v.get<long long>();
+  } else {
+    n = static_cast<long long>(v.get<double>());
+  }
+  if (n > maxVal || n < -maxVal - 1) throw tooLarge(std::to_string(n));
+  return n;
+}
+
 void checkRange(const std::string& path, double v, const Range& r) {
   if (!std::isfinite(v)) throw ConfigError(path, "must be finite");
   if (!r.contains(v)) {
@@ -103,6 +146,7 @@ bool Range::contains(double v) const {
 
 std::string Range::describe() const {
   std::ostringstream os;
+  os.precision(15);  // integer bounds such as 2147483647 exactly
   os << (loOpen ? "(" : "[") << lo << ", " << hi << (hiOpen ? ")" : "]");
   return os.str();
 }
@@ -290,11 +334,12 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         out[key] = v.get<double>();
         break;
       case KeyKind::Integer:
-        if (!isNumber(v) || !isIntegral(v))
-          throw ConfigError(path, "expected an integer, got " + typeName(v));
-        checkRange(path, v.get<double>(), spec.range);
-        out[key] = static_cast<long long>(v.get<double>());
+      {
+        const long long n = integerOf(path, v);
+        checkRange(path, static_cast<double>(n), spec.range);
+        out[key] = n;
         break;
+      }
       case KeyKind::Boolean:
         if (!v.is_boolean()) throw ConfigError(path, "expected a boolean, got " + typeName(v));
         out[key] = v;
@@ -321,14 +366,16 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         for (std::size_t i = 0; i < v.size(); ++i) {
           const std::string ip = path + "[" + std::to_string(i) + "]";
           const bool intOnly = spec.kind == KeyKind::IntVec3;
-          if (!isNumber(v[i]) || (intOnly && !isIntegral(v[i])))
-            throw ConfigError(ip, std::string("expected ") + (intOnly ? "an integer" : "a number") +
-                                      ", got " + typeName(v[i]));
+          if (intOnly) {
+            const long long n = integerOf(ip, v[i], 32);
+            checkRange(ip, static_cast<double>(n), spec.range);
+            arr.push_back(n);
+            continue;
+          }
+          if (!isNumber(v[i]))
+            throw ConfigError(ip, "expected a number, got " + typeName(v[i]));
           checkRange(ip, v[i].get<double>(), spec.range);
-          if (intOnly)
-            arr.push_back(static_cast<long long>(v[i].get<double>()));
-          else
-            arr.push_back(v[i].get<double>());
+          arr.push_back(v[i].get<double>());
         }
         out[key] = arr;
         break;
@@ -417,11 +464,100 @@ void applyOverride(Json& doc, const std::string& assignment) {
   }
 }
 
+namespace {
+
+/// Refuses a key written twice in one object (JSON would silently keep the last one), naming the
+/// key path. Fed the parser's events.
+class DuplicateKeyCheck {
+ public:
+  explicit DuplicateKeyCheck(std::string source) : source_(std::move(source)) {}
+  bool operator()(int, Json::parse_event_t ev, Json& parsed) {
+    using E = Json::parse_event_t;
+    switch (ev) {
+      case E::object_start:
+      case E::array_start:
+        frames_.push_back(Frame{ev == E::array_start, childPath(), {}, {}, 0});
+        break;
+      case E::key: {
+        Frame& f = frames_.back();
+        const std::string k = parsed.get<std::string>();
+        if (!f.keys.insert(k).second)
+          throw ConfigError(join(f.path, k), "key given twice in the same object of " + source_);
+        f.lastKey = k;
+        break;
+      }
+      case E::value:
+        if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+        break;
+      case E::object_end:
+      case E::array_end:
+        frames_.pop_back();
+        if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool array;
+    std::string path;
+    std::set<std::string> keys;
+    std::string lastKey;
+    std::size_t index;
+  };
+  std::string childPath() const {
+    if (frames_.empty()) return "";
+    const Frame& f = frames_.back();
+    return f.array ? f.path + "[" + std::to_string(f.index) + "]" : join(f.path, f.lastKey);
+  }
+  std::string source_;
+  std::vector<Frame> frames_;
+};
+
+/// "line N (after key "k")" of the first occurrence of `token` in `text` (for the parser's
+/// number-overflow error, which gives no position).
+std::string whereIs(const std::string& text, const std::string& token) {
+  if (token.empty()) return "";
+  // the first occurrence outside a // comment, as a whole token
+  std::size_t pos = text.find(token);
+  for (; pos != std::string::npos; pos = text.find(token, pos + 1)) {
+    const auto bol = text.rfind('\n', pos);
+    const std::string before = text.substr(bol == std::string::npos ? 0 : bol, pos - (bol == std::string::npos ? 0 : bol));
+    const char prev = pos > 0 ? text[pos - 1] : ' ';
+    if (before.find("//") == std::string::npos && prev != '\'' && prev != '"' && !std::isalnum(static_cast<unsigned char>(prev))) break;
+  }
+  if (pos == std::string::npos) return "";
+  const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n');
+  std::string where = "line " + std::to_string(line);
+  const auto colon = text.rfind(':', pos);
+  if (colon != std::string::npos) {
+    const auto q2 = text.rfind('"', colon);
+    const auto q1 = q2 == std::string::npos || q2 == 0 ? std::string::npos : text.rfind('"', q2 - 1);
+    if (q1 != std::string::npos) where += ", key \"" + text.substr(q1 + 1, q2 - q1 - 1) + "\"";
+  }
+  return where;
+}
+
+}  // namespace
+
 Config Config::fromText(const std::string& text, const std::string& source,
                         const std::vector<std::string>& overrides, const Schema& schema) {
   Json doc;
   try {
-    doc = Json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+    doc = Json::parse(text, DuplicateKeyCheck(source), /*allow_exceptions=*/true,
+                      /*ignore_comments=*/true);
+  } catch (const Json::out_of_range& e) {
+    // e.g. 1e400: "number overflow parsing '1e400'"
+    std::string what = e.what();
+    std::string token;
+    const auto q1 = what.find('\'');
+    const auto q2 = q1 == std::string::npos ? q1 : what.find('\'', q1 + 1);
+    if (q2 != std::string::npos) token = what.substr(q1 + 1, q2 - q1 - 1);
+    const std::string where = whereIs(text, token);
+    throw ConfigError("", source + ": number " + (token.empty() ? "" : "'" + token + "' ") +
+                              "is beyond what a double holds (about 1.8e308)" +
+                              (where.empty() ? "" : " at " + where));
   } catch (const Json::parse_error& e) {
     std::string what = e.what();
     const auto pos = what.find("parse error");
@@ -437,13 +573,29 @@ Config Config::load(const Comm& comm, const std::string& path,
                     const std::vector<std::string>& overrides, const Schema& schema) {
   std::string text, err;
   if (comm.isRoot()) {
-    std::ifstream in(path);
-    if (!in) {
+    std::error_code ec;
+    std::ifstream in;
+    if (std::filesystem::is_directory(path, ec))
+      err = "case file '" + path + "' is a directory, not a file";
+    else
+      in.open(path, std::ios::binary);
+    if (err.empty() && !in) {
       err = "cannot open case file '" + path + "'";
-    } else {
-      std::ostringstream ss;
-      ss << in.rdbuf();
-      text = ss.str();
+    } else if (err.empty()) {
+      // Bounded: a case file is a few kB; /dev/zero or a data file given by mistake is refused
+      // rather than read until memory runs out.
+      std::vector<char> buf(1 << 16);
+      while (in && text.size() <= kMaxCaseFileBytes) {
+        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+        text.append(buf.data(), static_cast<std::size_t>(in.gcount()));
+      }
+      if (text.size() > kMaxCaseFileBytes) {
+        err = "case file '" + path + "' is larger than " +
+              std::to_string(kMaxCaseFileBytes >> 20) + " MiB: not a case file";
+        text.clear();
+      } else if (in.bad()) {
+        err = "cannot read case file '" + path + "'";
+      }
     }
   }
   err = comm.broadcast(err);

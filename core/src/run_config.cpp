@@ -19,6 +19,10 @@ void declareRunConfig(Schema& s) {
            "when run.steps is 0, steps are taken until the simulated time reaches or passes "
            "this (s)",
            Range::nonNegative());
+  s.number("run.memory_limit", 0.0,
+           "memory a rank may use (GiB), checked against the estimate before anything large is "
+           "allocated; 0: the machine's MemAvailable shared by the ranks on the node",
+           Range::nonNegative());
   s.number("run.progress_interval_s", 2.0, "seconds between progress lines on rank 0 (0: off)",
            Range::nonNegative());
 }

@@ -1,6 +1,7 @@
 // Restart checkpoints: layout in coupling/include/coloc/coupling/checkpoint.hpp, docs/output.md.
 #include "coloc/coupling/checkpoint.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -28,6 +29,12 @@ std::vector<double> three(const Real3& v) {
   return {v[0], v[1], v[2]};
 }
 const char* const kAxis[3] = {"x", "y", "z"};
+
+std::string g9(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
 
 std::string fmt(const std::array<double, 3>& v) {
   char b[128];
@@ -200,6 +207,29 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
   readCellField(file, group + "/eps_old", dec, f.epsOld);
   readCellField(file, group + "/K", dec, f.K);
   readCellVector(file, group + "/KUp", dec, f.KUp[0], f.KUp[1], f.KUp[2]);
+  {
+    // A restart must not start from NaN or from an impossible fluid fraction.
+    std::string err;
+    auto finite = [&](const Field3<double>& x, const std::string& name, bool fraction = false) {
+      if (!err.empty()) return;
+      for (double v : x.data())
+        if (!std::isfinite(v) || (fraction && !(v > 0.0 && v <= 1.0))) {
+          err = group + "/" + name + ": value " + g9(v) +
+                (fraction ? " (a fluid fraction must lie in (0, 1])" : " (not finite)");
+          return;
+        }
+    };
+    for (int d = 0; d < 3; ++d) {
+      finite(f.u[d], std::string("u_") + kAxis[d]);
+      finite(std::as_const(fluid).history()[d], std::string("H_") + kAxis[d]);
+      finite(f.KUp[d], "KUp");
+    }
+    finite(f.p, "p");
+    finite(f.eps, "eps", true);
+    finite(f.epsOld, "eps_old", true);
+    finite(f.K, "K");
+    file.comm().raiseIfAny(err.empty() ? err : "checkpoint '" + file.path() + "': " + err);
+  }
   fv::FluidCounters c;
   c.time = file.attributeDouble(group, "time");
   c.dtOld = file.attributeDouble(group, "dt_old");
@@ -295,6 +325,80 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
   return s;
 }
 
+void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid& grid,
+                      std::size_t materials, const std::string& path, const std::string& group) {
+  const auto& p = s.particles;
+  const std::size_t n = p.nOwned;
+  std::string err;
+  auto bad = [&](const std::string& dataset, std::size_t i, const std::string& what) {
+    if (err.empty())
+      err = group + "/" + dataset + ": particle id " + std::to_string(p.id[i]) + " (row " +
+            std::to_string(i) + " of this rank's share) " + what;
+  };
+  for (std::size_t i = 0; i < n && err.empty(); ++i) {
+    if (p.id[i] < 0) bad("id", i, "has a negative id");
+    if (!(std::isfinite(p.mass[i]) && p.mass[i] > 0))
+      bad("mass", i, "has mass " + g9(p.mass[i]) + " (must be positive and finite)");
+    if (!(std::isfinite(p.radius[i]) && p.radius[i] > 0))
+      bad("radius", i,
+          "has radius " + g9(p.radius[i]) + " (must be positive and finite)");
+    if (p.material[i] < 0 || static_cast<std::size_t>(p.material[i]) >= materials)
+      bad("material", i,
+          "has material " + std::to_string(p.material[i]) + ", the case has " +
+              std::to_string(materials) + " (particles.materials)");
+    if (err.empty() && p.radius[i] > 0 && p.mass[i] > 0) {
+      const double rho = p.mass[i] / (4.0 / 3.0 * M_PI * p.radius[i] * p.radius[i] * p.radius[i]);
+      if (!std::isfinite(rho)) bad("mass", i, "has a density that is not finite");
+    }
+    for (int d = 0; d < 3 && err.empty(); ++d) {
+      const double x = p.x[d][i];
+      const double lo = grid.origin[d], hi = grid.origin[d] + grid.length[d];
+      const double tol = 1e-9 * grid.length[d];
+      if (!std::isfinite(x))
+        bad("x", i, "has a position that is not finite");
+      else if (!grid.periodic[d] && (x < lo - tol || x > hi + tol))
+        bad("x", i, std::string("is outside the box along ") + kAxis[d] + " (" +
+                        g9(x) + " m, box [" + g9(lo) + ", " + g9(hi) + "])");
+      for (const auto* a : {&p.v, &p.omega, &p.f, &p.torque, &p.fExt})
+        if (!std::isfinite((*a)[d][i])) bad("v, omega, f, torque, f_ext", i, "has a value that is not finite");
+    }
+  }
+  // Ids unique over all ranks, and every contact history held by (and pointing at) an existing
+  // particle: every rank gathers the sorted ids (8 bytes a particle, once at a restart).
+  std::vector<std::int64_t> all;
+  {
+    const int size = comm.size();
+    const int mine = static_cast<int>(n);
+    std::vector<int> counts(static_cast<std::size_t>(size)), displ;
+    MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm.raw());
+    all.resize(static_cast<std::size_t>(Comm::displacements(counts, displ)));
+    MPI_Allgatherv(p.id.data(), mine, MPI_INT64_T, all.data(), counts.data(), displ.data(),
+                   MPI_INT64_T, comm.raw());
+    std::sort(all.begin(), all.end());
+  }
+  if (err.empty() && comm.isRoot()) {
+    const auto dup = std::adjacent_find(all.begin(), all.end());
+    if (dup != all.end())
+      err = group + "/id: id " + std::to_string(*dup) + " appears more than once";
+  }
+  auto known = [&](std::int64_t id) { return std::binary_search(all.begin(), all.end(), id); };
+  for (std::size_t c = 0; c < s.contacts.size() && err.empty(); ++c) {
+    const auto& h = s.contacts[c];
+    if (!known(h.holder))
+      err = group + "/contacts/holder: row " + std::to_string(c) + " of this rank's share names id " +
+            std::to_string(h.holder) + ", which no particle has";
+    else if (h.partner < -6 || (h.partner >= 0 && !known(h.partner)))  // walls: -1..-6
+      err = group + "/contacts/partner: row " + std::to_string(c) +
+            " of this rank's share names id " + std::to_string(h.partner) +
+            ", which no particle has";
+    for (int d = 0; d < 3 && err.empty(); ++d)
+      if (!std::isfinite(h.shear[static_cast<std::size_t>(d)]) ||
+          !std::isfinite(h.roll[static_cast<std::size_t>(d)]))
+        err = group + "/contacts/shear, roll: row " + std::to_string(c) + " is not finite";
+  }
+  comm.raiseIfAny(err.empty() ? err : "checkpoint '" + path + "' is damaged: " + err);
+}
+
 dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long steps) {
   dem::DemState s;
   const std::size_t n = p.nOwned;
@@ -358,6 +462,7 @@ void Simulation::writeCheckpoint(const std::string& path, const std::string& sta
   ScopedPhase t(timers_, Phase::Checkpoint);
   const Comm& comm = dec_.comm();
   H5File f = H5File::create(comm, path, /*sync=*/true);
+  f.setChecksums(true);  // every dataset carries a Fletcher32 checksum, checked on restart
   f.setAttribute("/", "format", kCheckpointFormat);
   f.setAttribute("/", "version", kCheckpointVersion);
   f.setAttribute("/", "status", status);

@@ -81,6 +81,35 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
 
 }  // namespace
 
+BalancedLayout planBlocks(const Config& cfg, const GlobalGrid& g, const std::vector<double>& cost,
+                          int size, Int3 uniformDims, bool independent) {
+  const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
+  const int minCells = 2;  // the fluid's ghost layers
+  const auto dimsKey = cfg.intVec3(independent ? "partition.dem_dims" : "partition.dims");
+  const Int3 fixed{static_cast<int>(dimsKey[0]), static_cast<int>(dimsKey[1]),
+                   static_cast<int>(dimsKey[2])};
+  BalancedLayout best;
+  if (independent && fixed == Int3{0, 0, 0}) {
+    // The baseline keeps its physics apart: prefer a process grid other than the fluid's.
+    best.maxBlockCost = std::numeric_limits<double>::infinity();
+    for (int px = 1; px <= size; ++px)
+      for (int py = 1; py <= size / px; ++py) {
+        if (size % (px * py)) continue;
+        const Int3 dims{px, py, size / (px * py)};
+        if (dims == uniformDims && size > 1) continue;
+        try {
+          const auto l = balanceBlocks(g, cost, size, minCells, gran, dims);
+          if (l.maxBlockCost < best.maxBlockCost) best = l;
+        } catch (const ConfigError&) {
+        }
+      }
+    if (!std::isfinite(best.maxBlockCost)) best = balanceBlocks(g, cost, size, minCells, gran);
+  } else {
+    best = balanceBlocks(g, cost, size, minCells, gran, fixed);
+  }
+  return best;
+}
+
 Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   const std::string strategy = cfg.string("partition.strategy");
   if (cfg.integer("partition.rebalance_interval") > 0 && strategy != "balanced")
@@ -109,31 +138,7 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
                      std::span<const double>(p.x[1].data(), n),
                      std::span<const double>(p.x[2].data(), n), model);
   }
-  const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
-  const int minCells = 2;  // the fluid's ghost layers
-  const auto dimsKey = cfg.intVec3(independent ? "partition.dem_dims" : "partition.dims");
-  const Int3 fixed{static_cast<int>(dimsKey[0]), static_cast<int>(dimsKey[1]),
-                   static_cast<int>(dimsKey[2])};
-  BalancedLayout best;
-  if (independent && fixed == Int3{0, 0, 0}) {
-    // The baseline keeps its physics apart: prefer a process grid other than the fluid's.
-    best.maxBlockCost = std::numeric_limits<double>::infinity();
-    const int size = world.size();
-    for (int px = 1; px <= size; ++px)
-      for (int py = 1; py <= size / px; ++py) {
-        if (size % (px * py)) continue;
-        const Int3 dims{px, py, size / (px * py)};
-        if (dims == uniform.dims() && size > 1) continue;
-        try {
-          const auto l = balanceBlocks(g, cost, size, minCells, gran, dims);
-          if (l.maxBlockCost < best.maxBlockCost) best = l;
-        } catch (const ConfigError&) {
-        }
-      }
-    if (!std::isfinite(best.maxBlockCost)) best = balanceBlocks(g, cost, size, minCells, gran);
-  } else {
-    best = balanceBlocks(g, cost, world.size(), minCells, gran, fixed);
-  }
+  const BalancedLayout best = planBlocks(cfg, g, cost, world.size(), uniform.dims(), independent);
   const Decomposition balanced = Decomposition::fromCuts(world, g, best.cuts);
   if (independent) {
     L.particles = balanced;
@@ -179,9 +184,15 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
     if (file) readFluidState(*file, "/fluid", dec_, *fluid_);
   }
   if (mode_ != RunMode::FluidOnly) {
-    dem_ = file ? std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
-                                                   readDemState(*file, "/particles"))
-                : std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
+    if (file) {
+      dem::DemState state = readDemState(*file, "/particles");
+      validateDemState(dec_.comm(), state, dec_.grid(), cfg.at("particles.materials").size(),
+                       *checkpoint);
+      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
+                                              std::move(state));
+    } else {
+      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
+    }
     if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
   }
   if (file) {

@@ -84,6 +84,10 @@ bool BoxBc::any(BcType t) const {
   return false;
 }
 
+void checkBoundaryConfig(const Config& cfg, const GlobalGrid& grid) {
+  (void)boundaryFromConfig(cfg, grid);
+}
+
 BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
   BoxBc bc;
   bc.cells = grid.cells;

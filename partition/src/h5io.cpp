@@ -268,6 +268,20 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
                  H5Sclose);
     Hid dcpl = plist(H5P_DATASET_CREATE, "H5Pcreate(dcpl)");
     checkErr(H5Pset_fill_time(dcpl, H5D_FILL_TIME_NEVER), "H5Pset_fill_time");
+    if (file.checksums() && s.globalElements() > 0) {
+      // Chunks of at most 4 MiB (slowest axes cut first), each with its Fletcher32 checksum.
+      std::array<hsize_t, 4> chunk = s.global;
+      const double limit = 4.0 * 1024 * 1024;
+      for (int a = 0; a < s.rank; ++a) {
+        double bytes = 8;
+        for (int b = 0; b < s.rank; ++b) bytes *= static_cast<double>(chunk[static_cast<std::size_t>(b)]);
+        if (bytes <= limit) break;
+        auto& c = chunk[static_cast<std::size_t>(a)];
+        c = std::max<hsize_t>(1, static_cast<hsize_t>(static_cast<double>(c) * limit / bytes));
+      }
+      checkErr(H5Pset_chunk(dcpl, s.rank, chunk.data()), "H5Pset_chunk");
+      checkErr(H5Pset_fletcher32(dcpl), "H5Pset_fletcher32");
+    }
     Hid lcpl = parentsLcpl();
     dset = Hid(
         checkId(H5Dcreate2(file.id(), path.c_str(), fileType(e), fspace, lcpl, dcpl, H5P_DEFAULT),
@@ -550,7 +564,8 @@ H5File::H5File(H5File&& o) noexcept
       writePath_(std::move(o.writePath_)),
       writable_(o.writable_),
       sync_(o.sync_),
-      root_(o.root_) {}
+      root_(o.root_),
+      checksums_(o.checksums_) {}
 
 H5File& H5File::operator=(H5File&& o) noexcept {
   if (this != &o) {
@@ -562,6 +577,7 @@ H5File& H5File::operator=(H5File&& o) noexcept {
     writable_ = o.writable_;
     sync_ = o.sync_;
     root_ = o.root_;
+    checksums_ = o.checksums_;
   }
   return *this;
 }

@@ -99,3 +99,31 @@ TEST(Config, DescribeListsEveryKey) {
   for (const char* k : {"fluid.nu", "run.steps", "run.mode", "domain.length", "particles.sources"})
     EXPECT_NE(text.find(k), std::string::npos) << k;
 }
+
+TEST(Config, NumbersPastTheirTypeDuplicatesAndOverflow) {
+  const std::string base = R"("domain": { "length": [1, 1, 1] })";
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"steps\": 9223372036854775808 } }"),
+            "run.steps: value 9223372036854775808 is beyond what a 64-bit integer holds (at most "
+            "9223372036854775807)");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"steps\": 18446744073709551615 } }"),
+            "run.steps: value 18446744073709551615 is beyond what a 64-bit integer holds (at most "
+            "9223372036854775807)");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"steps\": 1e20 } }"),
+            "run.steps: value 1e+20 is beyond what a 64-bit integer holds (at most "
+            "9223372036854775807)");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"steps\": 9223372036854775807 } }"), "");
+  EXPECT_EQ(errorOf("{" + base + ", \"run\": { \"steps\": 2e3 } }"), "");
+  EXPECT_EQ(errorOf("{" + base + R"(, "particles": { "sources": [ { "type": "lattice",
+            "count": [1, 2147483648, 1] } ] } })"),
+            "particles.sources[0].count[1]: value 2147483648 is beyond what a 32-bit integer holds "
+            "(at most 2147483647)");
+  EXPECT_EQ(errorOf("{" + base + ", \"fluid\": { \"nu\": 1, \"nu\": 2 } }"),
+            "fluid.nu: key given twice in the same object of case.json");
+  EXPECT_EQ(errorOf("{" + base + R"(, "particles": { "sources": [ { "type": "list", "x": [1] },
+            { "type": "list", "x": [1], "x": [2] } ] } })"),
+            "particles.sources[1].x: key given twice in the same object of case.json");
+  EXPECT_EQ(errorOf("// 1e400 in a comment\n{" + base + ",\n \"fluid\": { \"nu\": 1e400 } }"),
+            "case.json: number '1e400' is beyond what a double holds (about 1.8e308) at line 3, "
+            "key \"nu\"");
+  EXPECT_EQ(errorOf("{" + base + "}", {"fluid.nu=1e400"}), "fluid.nu: expected a number, got a string");
+}

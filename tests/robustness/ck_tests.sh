@@ -14,6 +14,15 @@
 #                  the last good one kept, and a restart from the failed one refused
 #   badrestart     --restart with a missing, a corrupt, another grid's and a failed checkpoint:
 #                  a clear error, non-zero exit, no hang
+#   damaged        --restart from a checkpoint with one flipped bit in the ids, masses, positions,
+#                  contact holders or the fluid pressure (Fletcher32 checksum), or rewritten with
+#                  valid checksums but impossible values (a duplicate id, a negative mass, a
+#                  particle outside the box, a contact held by no particle, a NaN pressure):
+#                  refused naming the file and dataset, exit 2 on every rank, no hang
+#   check          `coloc check --ranks 2` (one process) shows the blocks, the particles a rank
+#                  and the modelled imbalance that a 2-rank run then reports, for the uniform and
+#                  the balanced strategy; exit 2 for a bad case and for a case too large for the
+#                  machine (run refused the same way); `coloc keys PREFIX`
 set -u
 test=$1 coloc=$2 mpiexec=$3 py=$4 case=$5 work=$6
 shift 6
@@ -147,6 +156,66 @@ EOF
     "$expect" "it was written in run.mode coupled" -- "$mpiexec" -n 2 --bind-to none \
       "$coloc" run "$case" --out "$work/x" --quiet --set run.mode=fluid \
       --restart "$work/a/checkpoint.h5" || fail "restart in another mode"
+    ;;
+  damaged)
+    run 2 "$work/a" --set run.steps=4 --set output.checkpoint_interval=4 ||
+      { cat "$work/a.log"; fail "run failed"; }
+    good=$work/a/checkpoint.h5
+    damage() {  # damage EXPECTED MODE DATASET ARG
+      local bad=$work/bad.h5
+      "$py" "$here/damage_checkpoint.py" "$good" "$bad" "$2" "$3" "$4" || fail "damaging $3"
+      "$expect" "$1" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out "$work/x" \
+        --quiet --restart "$bad" > "$work/damaged.log" 2>&1
+      local rc=$?
+      cat "$work/damaged.log"
+      [[ $rc -eq 0 ]] || fail "damaged $3 ($2) not refused as expected"
+      grep -q "^PASS: exit 2 with" "$work/damaged.log" ||
+        fail "damaged $3: exit status is not 2"
+    }
+    for ds in particles/id particles/mass particles/x particles/contacts/holder fluid/p; do
+      damage "$work/bad.h5:/$ds: H5Dread failed" flip "$ds" 13
+      damage "Fletcher32 checksum" flip "$ds" 3
+    done
+    damage "is damaged: /particles/id: id" set particles/id "a[3] = a[4]"
+    damage "is damaged: /particles/id: particle id -" set particles/id "a[7] = -5"
+    damage "/particles/mass: particle id" set particles/mass "a[5] = -3.7e8"
+    damage "/particles/radius: particle id" set particles/radius "a[2] = np.nan"
+    damage "/particles/x: particle id" set particles/x "a[9, 2] = 1.0"
+    damage "/particles/contacts/holder: row 0" set particles/contacts/holder "a[0] = 99999"
+    damage "/fluid/p: value nan" set fluid/p "a[1, 2, 3] = np.nan"
+    damage "/fluid/eps: value" set fluid/eps "a[0, 0, 0] = -0.5"
+    ;;
+  check)
+    for st in uniform balanced; do
+      timeout 60 "$coloc" check "$case" --ranks 2 --set partition.strategy=$st > "$work/check_$st.txt" 2>&1 ||
+        { cat "$work/check_$st.txt"; fail "coloc check ($st) exit $?"; }
+      cat "$work/check_$st.txt"
+      grep -q "the case is valid for 2 rank(s); nothing was run" "$work/check_$st.txt" || fail "no verdict"
+      [[ -e $work/c_$st ]] && fail "coloc check wrote output"
+      run 2 "$work/r_$st" --set run.steps=1 --set partition.strategy=$st ||
+        { cat "$work/r_$st.log"; fail "run ($st) failed"; }
+      "$py" - "$work/check_$st.txt" "$work/r_$st/report.json" "$st" <<'EOF2' || fail "check and run differ ($st)"
+import json, re, sys
+text, rep, st = open(sys.argv[1]).read(), json.load(open(sys.argv[2])), sys.argv[3]
+m = re.search(r"^\* " + st + r" +(\d+)x(\d+)x(\d+) +(\d+)x(\d+)x(\d+) .* ([0-9.]+) +[0-9.]+ MiB$", text, re.M)
+assert m, "no line for " + st
+dims = [int(m.group(i)) for i in (1, 2, 3)]
+print("check:", dims, m.group(7), " run:", rep["partition"]["fluid_dims"], rep["partition"].get("balanced"))
+assert dims == rep["partition"]["fluid_dims"], (dims, rep["partition"])
+if st == "balanced":
+    assert abs(float(m.group(7)) - rep["partition"]["balanced"]["modelled_imbalance"]) < 1e-3
+    assert abs(float(re.search(r"^  uniform .* ([0-9.]+) +[0-9.]+ MiB$", text, re.M).group(1)) -
+               rep["partition"]["balanced"]["uniform_modelled_imbalance"]) < 1e-3
+EOF2
+    done
+    "$expect" "an inlet but no outlet" -- "$coloc" check "$case" --ranks 2 \
+      --set 'fluid.boundary.zhi={"type":"wall"}' || fail "check of a bad case"
+    "$expect" "a run on 2 rank(s) here would be refused" -- "$coloc" check "$case" --ranks 2 \
+      --set 'domain.cells=[4000,4000,4000]' || fail "check of a case too large"
+    "$expect" "no case-file key starts with this" -- "$coloc" keys particles.nope || fail "keys"
+    "$coloc" keys particles.sources > "$work/keys.txt" || fail "keys particles.sources"
+    grep -q "particles.sources{type=random}.count" "$work/keys.txt" || fail "keys: no count"
+    grep -q "fluid.nu" "$work/keys.txt" && fail "keys particles.sources lists fluid keys"
     ;;
   *) fail "unknown test $test" ;;
 esac

@@ -96,6 +96,9 @@ class Schema {
   friend class Config;
 };
 
+/// Case files larger than this are refused unread (a case file is a few kB).
+inline constexpr std::size_t kMaxCaseFileBytes = std::size_t{64} << 20;
+
 /// A validated, resolved case. Accessors take a dotted path into the resolved JSON.
 class Config {
  public:

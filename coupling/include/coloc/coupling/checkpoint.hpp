@@ -66,6 +66,14 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
 void writeDemState(H5File& file, const std::string& group, const dem::DemState& s);
 /// An even share of the rows on each rank (the restoring DemSolver sends them to their owners).
 dem::DemState readDemState(H5File& file, const std::string& group);
+/// Semantic checks of a restored particle state (collective): ids non-negative and unique over
+/// all ranks, mass and radius positive and finite, materials among the case's `materials`,
+/// positions finite and inside the box (any value along a periodic axis), velocities and forces
+/// finite, every contact history held by and pointing at an existing particle. Throws Error on
+/// every rank naming the file `path` and the dataset.
+void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid& grid,
+                      std::size_t materials, const std::string& path,
+                      const std::string& group = "/particles");
 /// The owned particles without contact histories (when DemSolver::saveState cannot run: the
 /// state at a failure).
 dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long steps);

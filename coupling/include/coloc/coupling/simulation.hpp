@@ -70,6 +70,12 @@ void declareConfig(Schema& s);
 /// The schema of a whole case file: run, domain, partition, fluid, particles, coupling.
 Schema caseSchema();
 
+/// The cuts the balanced strategy (independent: the DEM's own blocks) places for `size` ranks
+/// from the global cell costs; pure (no communicator), shared by the run and `coloc check`.
+BalancedLayout planBlocks(const Config& cfg, const GlobalGrid& grid,
+                          const std::vector<double>& cost, int size, Int3 uniformDims,
+                          bool independent);
+
 /// The blocks of the two physics chosen by partition.strategy.
 struct Layouts {
   Decomposition fluid;

@@ -25,6 +25,10 @@
 
 namespace coloc::fv {
 
+/// Checks the fluid.boundary.* keys against the grid (types, periodicity, wall velocities) as
+/// the solver's construction does, without allocating anything. Throws ConfigError.
+void checkBoundaryConfig(const Config& cfg, const GlobalGrid& grid);
+
 /// Declares the "fluid.*" keys of the case file.
 void declareConfig(Schema& s);
 

@@ -56,6 +56,10 @@ class H5File {
   /// The final path (NAME, not NAME.tmp).
   const std::string& path() const { return path_; }
   bool writable() const { return writable_; }
+  /// Datasets created from now on are chunked with HDF5's Fletcher32 checksum filter: a read of
+  /// damaged data fails (checkpoints). Parallel filtered writes: collective, HDF5 >= 1.10.2.
+  void setChecksums(bool on) { checksums_ = on; }
+  bool checksums() const { return checksums_; }
   /// The HDF5 file id (hid_t), for code that needs HDF5 calls of its own.
   std::int64_t id() const { return id_; }
 
@@ -88,7 +92,7 @@ class H5File {
   Comm comm_;
   std::int64_t id_ = -1;
   std::string path_, writePath_;
-  bool writable_ = false, sync_ = false, root_ = false;
+  bool writable_ = false, sync_ = false, root_ = false, checksums_ = false;
 };
 
 // ---- fields: each rank writes/reads its owned block of the global array -----------------------

@@ -1,0 +1,379 @@
+// `coloc check CASE [--ranks N]`: validate a case and show what a run on N ranks would do, in one
+// process, running nothing (docs/case-files.md). `coloc keys [PREFIX]`.
+#include "check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+
+#include "coloc/core/config.hpp"
+#include "coloc/core/run_config.hpp"
+#include "coloc/core/timers.hpp"
+#include "coloc/coupling/case_checks.hpp"
+#include "coloc/coupling/simulation.hpp"
+#include "coloc/dem/dem.hpp"
+#include "coloc/fv/fluid.hpp"
+#include "coloc/partition/balance.hpp"
+#include "coloc/partition/setup.hpp"
+#include "run.hpp"
+
+namespace coloc {
+namespace {
+
+/// One strategy's blocks for N ranks: fluid cuts and particle cuts (the same but in independent).
+struct Plan {
+  std::string strategy;
+  std::array<std::vector<int>, 3> fluidCuts, particleCuts;
+  std::string error;  // the strategy cannot lay out this case on N ranks
+};
+
+Int3 dimsOf(const std::array<std::vector<int>, 3>& cuts) {
+  return {static_cast<int>(cuts[0].size()) - 1, static_cast<int>(cuts[1].size()) - 1,
+          static_cast<int>(cuts[2].size()) - 1};
+}
+
+/// Sum of `perCell` (x fastest) over each block of `cuts`, block rank order x fastest.
+std::vector<double> blockSums(const GlobalGrid& g, const std::array<std::vector<int>, 3>& cuts,
+                              const std::vector<double>& perCell) {
+  const Int3 d = dimsOf(cuts);
+  std::vector<double> out(static_cast<std::size_t>(d[0] * d[1] * d[2]), 0.0);
+  std::array<std::vector<int>, 3> blockOf;
+  for (int a = 0; a < 3; ++a) {
+    blockOf[a].resize(static_cast<std::size_t>(g.cells[a]));
+    for (int b = 0; b < d[a]; ++b)
+      for (int c = cuts[a][b]; c < cuts[a][b + 1]; ++c) blockOf[a][c] = b;
+  }
+  for (int k = 0; k < g.cells[2]; ++k)
+    for (int j = 0; j < g.cells[1]; ++j)
+      for (int i = 0; i < g.cells[0]; ++i) {
+        const int b = blockOf[0][i] + d[0] * (blockOf[1][j] + d[1] * blockOf[2][k]);
+        out[static_cast<std::size_t>(b)] +=
+            perCell[static_cast<std::size_t>(i + g.cells[0] * (j + 1LL * g.cells[1] * k))];
+      }
+  return out;
+}
+
+std::vector<long long> blockCells(const std::array<std::vector<int>, 3>& cuts) {
+  const Int3 d = dimsOf(cuts);
+  std::vector<long long> out;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i)
+        out.push_back(1LL * (cuts[0][i + 1] - cuts[0][i]) * (cuts[1][j + 1] - cuts[1][j]) *
+                      (cuts[2][k + 1] - cuts[2][k]));
+  return out;
+}
+
+Int3 blockExtent(const std::array<std::vector<int>, 3>& cuts, int r) {
+  const Int3 d = dimsOf(cuts);
+  const int c[3] = {r % d[0], (r / d[0]) % d[1], r / (d[0] * d[1])};
+  Int3 e{};
+  for (int a = 0; a < 3; ++a) e[a] = cuts[a][c[a] + 1] - cuts[a][c[a]];
+  return e;
+}
+
+std::string g6(double v) {
+  char b[48];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+template <class T>
+std::string minMax(const std::vector<T>& v) {
+  if (v.empty()) return "-";
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  return g6(static_cast<double>(*lo)) + " .. " + g6(static_cast<double>(*hi));
+}
+
+}  // namespace
+
+int checkCase(const CheckOptions& opts) {
+  const Comm self(MPI_COMM_SELF);
+  const Config cfg = Config::load(self, opts.casePath, opts.overrides, coupling::caseSchema());
+  const std::vector<std::string> notes = coupling::checkCase(cfg);
+  const GlobalGrid g = gridFromConfig(cfg);
+  const int N = opts.ranks;
+  if (N < 1) throw ConfigError("--ranks", "must be at least 1");
+  const RunMode mode = runMode(cfg);
+  const std::string strategy = cfg.string("partition.strategy");
+  std::printf(
+      "coloc check: case '%s' (%s), mode %s, %d x %d x %d = %lld cells, box %g x %g x %g m, "
+      "%d rank(s)\n",
+      cfg.string("name").c_str(), opts.casePath.c_str(), runModeName(mode), g.cells[0], g.cells[1],
+      g.cells[2], g.cellCount(), g.length[0], g.length[1], g.length[2], N);
+
+  // Memory first (nothing allocated yet): the run's own check (largest uniform block, mean
+  // particles a rank), with N ranks on this node.
+  std::string how;
+  const double limit = coupling::memoryLimitPerRank(cfg, N, &how);
+  const auto est = coupling::estimateMemory(cfg, coupling::largestUniformBlock(cfg, N),
+                                            coupling::sourceParticleCount(cfg) / N);
+  std::printf(
+      "coloc check: memory estimate a rank: %s (fluid and pressure solver %s, coupling "
+      "%s, particles %s, base %s)\n",
+      coupling::bytesText(est.total()).c_str(), coupling::bytesText(est.fluidBytes).c_str(),
+      coupling::bytesText(est.couplingBytes).c_str(),
+      coupling::bytesText(est.particleBytes).c_str(), coupling::bytesText(est.baseBytes).c_str());
+  std::printf("coloc check: this machine offers %s a rank (%s, all %d ranks on this node)\n",
+              limit > 0 ? coupling::bytesText(limit).c_str() : "?", how.c_str(), N);
+  if (limit > 0 && est.total() > limit) {
+    std::fprintf(stderr,
+                 "coloc: error: domain.cells, particles.sources: the case needs about %s a rank, "
+                 "the machine offers %s (%s): a run on %d rank(s) here would be refused\n",
+                 coupling::bytesText(est.total()).c_str(), coupling::bytesText(limit).c_str(),
+                 how.c_str(), N);
+    return 2;
+  }
+  // The per-cell cost arrays of the layouts (what the balanced run itself builds on every rank)
+  // must fit in this one process too.
+  const double perCellBytes = 3.0 * 8.0 * static_cast<double>(g.cellCount());
+  if (limit > 0 && perCellBytes > 0.5 * limit * N) {
+    std::printf(
+        "coloc check: %lld cells: the per-cell layouts (%s) are not computed in one "
+        "process; nothing was run\n",
+        g.cellCount(), coupling::bytesText(perCellBytes).c_str());
+    for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
+    return 0;
+  }
+
+  // The particles as the run generates them (deterministic, the same on any rank count), on one
+  // block here; this also runs the DEM's own checks (overlaps, particles outside the box, dt).
+  std::vector<double> particlesPerCell(static_cast<std::size_t>(g.cellCount()), 0.0);
+  double particleCount = 0, rMin = 0, rMax = 0;
+  std::vector<int> materialOf;
+  const Decomposition one = Decomposition::uniform(self, g, {1, 1, 1});
+  const double demDt = cfg.number("particles.dt");
+  if (mode != RunMode::FluidOnly && !cfg.at("particles.sources").empty()) {
+    Timers scratch;
+    dem::DemSolver probe(one, cfg, scratch);
+    const auto& p = probe.particles();
+    const std::size_t n = p.nOwned;
+    particlesPerCell = cellCosts(one, std::span<const double>(p.x[0].data(), n),
+                                 std::span<const double>(p.x[1].data(), n),
+                                 std::span<const double>(p.x[2].data(), n), CostModel{0.0, 1.0});
+    particleCount = static_cast<double>(n);
+    if (n > 0) {
+      rMin = *std::min_element(p.radius.begin(), p.radius.begin() + static_cast<long>(n));
+      rMax = *std::max_element(p.radius.begin(), p.radius.begin() + static_cast<long>(n));
+    }
+  }
+  std::printf("coloc check: %.0f particles", particleCount);
+  if (particleCount > 0) std::printf(", radius %g .. %g m", rMin, rMax);
+  std::printf("\n");
+
+  // The layouts each strategy would choose for N ranks (the run's own partition code).
+  const auto dk = cfg.intVec3("partition.dims");
+  const Int3 fixed{static_cast<int>(dk[0]), static_cast<int>(dk[1]), static_cast<int>(dk[2])};
+  std::vector<Plan> plans;
+  std::array<std::vector<int>, 3> uniformCuts;
+  Int3 uniformDims{};
+  std::string uniformError;
+  try {
+    uniformDims = Decomposition::chooseDims(N, g, fixed);
+    for (int a = 0; a < 3; ++a) {
+      if (uniformDims[a] > g.cells[a])
+        throw ConfigError("partition.dims", std::to_string(uniformDims[a]) + " ranks along " +
+                                                std::string(1, "xyz"[a]) + " but only " +
+                                                std::to_string(g.cells[a]) + " cells");
+      uniformCuts[a] = Decomposition::evenCuts(g.cells[a], uniformDims[a]);
+    }
+  } catch (const Error& e) {
+    uniformError = e.what();
+  }
+  const CostModel caseModel{cfg.number("partition.cost.cell"),
+                            cfg.number("partition.cost.particle")};
+  std::vector<double> caseCost(particlesPerCell.size());
+  for (std::size_t c = 0; c < caseCost.size(); ++c)
+    caseCost[c] = caseModel.perCell + caseModel.perParticle * particlesPerCell[c];
+  for (const char* s : {"uniform", "balanced", "independent"}) {
+    Plan p;
+    p.strategy = s;
+    p.error = uniformError;
+    if (p.error.empty()) {
+      p.fluidCuts = p.particleCuts = uniformCuts;
+      try {
+        if (p.strategy != "uniform" && mode != RunMode::FluidOnly) {
+          const bool independent = p.strategy == "independent";
+          std::vector<double> cost = caseCost;
+          if (independent)
+            for (std::size_t c = 0; c < cost.size(); ++c) cost[c] = particlesPerCell[c];
+          const BalancedLayout l = coupling::planBlocks(cfg, g, cost, N, uniformDims, independent);
+          if (independent)
+            p.particleCuts = l.cuts;
+          else
+            p.fluidCuts = p.particleCuts = l.cuts;
+        }
+      } catch (const Error& e) {
+        p.error = e.what();
+      }
+    }
+    plans.push_back(std::move(p));
+  }
+  if (cfg.integer("partition.calibrate_steps") > 0)
+    std::printf(
+        "coloc check: partition.calibrate_steps: the run measures the cost weights first; "
+        "shown here with partition.cost.cell = %g, partition.cost.particle = %g\n",
+        caseModel.perCell, caseModel.perParticle);
+
+  std::printf("\n  %-12s %-9s %-9s %-20s %-20s %-10s %s\n", "strategy", "fluid", "DEM",
+              "cells/rank", "particles/rank", "imbalance", "memory/rank (max)");
+  double caseMem = 0;
+  for (const Plan& p : plans) {
+    const bool chosen = p.strategy == strategy;
+    if (!p.error.empty()) {
+      std::printf("%s %-12s cannot lay out this case: %s\n", chosen ? "*" : " ", p.strategy.c_str(),
+                  p.error.c_str());
+      continue;
+    }
+    const auto cells = blockCells(p.fluidCuts);
+    const auto parts = blockSums(g, p.particleCuts, particlesPerCell);
+    const auto cost = blockSums(g, p.fluidCuts, caseCost);
+    const double avg =
+        std::accumulate(cost.begin(), cost.end(), 0.0) / static_cast<double>(cost.size());
+    const double imb = avg > 0 ? *std::max_element(cost.begin(), cost.end()) / avg : 1.0;
+    double mem = 0;
+    for (int r = 0; r < N; ++r)
+      mem = std::max(mem, coupling::estimateMemory(cfg, blockExtent(p.fluidCuts, r),
+                                                   parts[static_cast<std::size_t>(r)])
+                              .total());
+    if (chosen) caseMem = mem;
+    const Int3 fd = dimsOf(p.fluidCuts), pd = dimsOf(p.particleCuts);
+    char fdims[48], pdims[48];
+    std::snprintf(fdims, sizeof fdims, "%dx%dx%d", fd[0], fd[1], fd[2]);
+    std::snprintf(pdims, sizeof pdims, "%dx%dx%d", pd[0], pd[1], pd[2]);
+    std::printf("%s %-12s %-9s %-9s %-20s %-20s %-10.3f %s\n", chosen ? "*" : " ",
+                p.strategy.c_str(), fdims, pdims, minMax(cells).c_str(), minMax(parts).c_str(), imb,
+                coupling::bytesText(mem).c_str());
+    if (opts.verbose) {
+      for (int a = 0; a < 3; ++a) {
+        std::printf("      cuts %c:", "xyz"[a]);
+        for (int c : p.fluidCuts[a]) std::printf(" %d", c);
+        if (p.particleCuts[a] != p.fluidCuts[a]) {
+          std::printf("   DEM:");
+          for (int c : p.particleCuts[a]) std::printf(" %d", c);
+        }
+        std::printf("\n");
+      }
+    }
+  }
+  std::printf(
+      "  (* the case's partition.strategy; imbalance: largest / mean block cost with "
+      "partition.cost.*)\n\n");
+
+  std::printf(
+      "coloc check: memory of the busiest rank of the case's layout (its particles, "
+      "its block): %s\n",
+      coupling::bytesText(caseMem).c_str());
+
+  // Time-step limits.
+  const auto& mats = cfg.at("particles.materials");
+  if (mode != RunMode::FluidOnly && particleCount > 0 && !mats.empty()) {
+    const bool hertz = cfg.string("particles.contact_model") == "hertz_mindlin";
+    double tLim = std::numeric_limits<double>::infinity(), tHertz = tLim;
+    // impact speed: the fastest of the inlets, the initial velocities and a fall over the box
+    double vRef = std::sqrt(
+        2.0 * std::hypot(cfg.vec3("gravity")[0], cfg.vec3("gravity")[1], cfg.vec3("gravity")[2]) *
+        std::max({g.length[0], g.length[1], g.length[2]}));
+    for (const auto& s : cfg.at("particles.sources")) {
+      const auto& v = s.at("velocity");
+      vRef = std::max(vRef, std::hypot(v[0].get<double>(), v[1].get<double>(), v[2].get<double>()) +
+                                std::sqrt(3.0) * s.at("velocity_spread").get<double>());
+    }
+    for (const auto& m : mats) {
+      const double E = m.at("young").get<double>(), nu = m.at("poisson").get<double>();
+      const double rho = m.at("density").get<double>();
+      const double mass = rho * 4.0 / 3.0 * M_PI * rMin * rMin * rMin;
+      if (hertz) {
+        const double G = E / (2 * (1 + nu));
+        tLim = std::min(tLim, M_PI * rMin * std::sqrt(rho / G) / (0.1631 * nu + 0.8766));
+        const double Es = E / (2 * (1 - nu * nu)), Rs = rMin / 2, ms = mass / 2;
+        if (vRef > 0)
+          tHertz = std::min(tHertz, 2.87 * std::pow(ms * ms / (Rs * Es * Es * vRef), 0.2));
+      } else {
+        tLim = std::min(tLim, M_PI * std::sqrt(0.5 * mass / cfg.number("particles.linear.kn")));
+      }
+    }
+    std::printf(
+        "coloc check: DEM: particles.dt = %g s = %.3g of the %s %.3g s (limit "
+        "particles.dt_fraction = %g)",
+        demDt, demDt / tLim, hertz ? "Rayleigh time" : "linear collision time", tLim,
+        cfg.number("particles.dt_fraction"));
+    if (hertz && std::isfinite(tHertz))
+      std::printf("; Hertz contact time at %.3g m/s: %.3g s = %.0f DEM steps", vRef, tHertz,
+                  tHertz / demDt);
+    std::printf("\n");
+  }
+  if (mode != RunMode::ParticlesOnly) {
+    double h = std::min({g.spacing(0), g.spacing(1), g.spacing(2)});
+    double u = 0;
+    const auto iv = cfg.vec3("fluid.initial_velocity");
+    for (int a = 0; a < 3; ++a) u = std::max(u, std::fabs(iv[a]));
+    for (const char* f : {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"}) {
+      const auto& b = cfg.at(std::string("fluid.boundary.") + f);
+      if (b.at("type").get<std::string>() != "inlet") continue;
+      double s = 0;
+      for (int a = 0; a < 3; ++a) s = std::max(s, std::fabs(b.at("velocity")[a].get<double>()));
+      if (b.at("superficial").get<bool>() && mode != RunMode::FluidOnly)
+        s /= cfg.number("coupling.eps_min");
+      u = std::max(u, s);
+    }
+    double dt = cfg.number("fluid.dt");
+    const long long sub = cfg.integer("coupling.dem_substeps");
+    if ((mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0)
+      dt = static_cast<double>(sub) * demDt;
+    const double nu = cfg.number("fluid.nu");
+    std::printf(
+        "coloc check: CFD: step %g s%s, smallest cell %g m, reference speed %g m/s: CFL "
+        "%.3g (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
+        dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, u * dt / h,
+        cfg.number("fluid.cfl_max"), nu * dt / (h * h));
+    if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
+      std::printf(", %.0f DEM sub-steps a CFD step", dt / demDt);
+    std::printf("\n");
+    if (u * dt / h > cfg.number("fluid.cfl_max"))
+      std::printf(
+          "coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run would "
+          "stop at its first steps (lower fluid.dt or use fluid.adaptive_dt)\n");
+  }
+  for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
+
+  const Plan* chosen = nullptr;
+  for (const Plan& p : plans)
+    if (p.strategy == strategy) chosen = &p;
+  if (chosen && !chosen->error.empty()) {
+    std::fprintf(stderr, "coloc: error: %s\n", chosen->error.c_str());
+    return 2;
+  }
+  std::printf("coloc check: the case is valid for %d rank(s); nothing was run\n", N);
+  return 0;
+}
+
+std::string describeKeys(const std::string& prefix) {
+  const std::string all = describeKeys();
+  if (prefix.empty()) return all;
+  // Blocks: a line "  path  (kind...)" and its help lines (indented further).
+  std::istringstream in(all);
+  std::string line, out, block, path;
+  auto flush = [&] {
+    const bool match = path == prefix || path.rfind(prefix + ".", 0) == 0 ||
+                       path.rfind(prefix + "[", 0) == 0 || path.rfind(prefix + "{", 0) == 0;
+    if (!block.empty() && match) out += block;
+    block.clear();
+  };
+  std::getline(in, line);  // the title
+  while (std::getline(in, line)) {
+    if (line.size() > 2 && line[0] == ' ' && line[1] == ' ' && line[2] != ' ') {
+      flush();
+      path = line.substr(2, line.find(' ', 2) - 2);
+    }
+    block += line + "\n";
+  }
+  flush();
+  if (out.empty())
+    throw ConfigError(prefix, "no case-file key starts with this (coloc keys lists them all)");
+  return out;
+}
+
+}  // namespace coloc

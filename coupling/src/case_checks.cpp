@@ -1,0 +1,245 @@
+// Whole-case checks and the memory estimate: coupling/include/coloc/coupling/case_checks.hpp.
+#include "coloc/coupling/case_checks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "coloc/core/error.hpp"
+#include "coloc/core/run_config.hpp"
+#include "coloc/fv/fluid.hpp"
+#include "coloc/partition/setup.hpp"
+
+namespace coloc::coupling {
+
+namespace {
+
+const char* const kFaces[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
+
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+void checkName(const Config& cfg) {
+  const std::string name = cfg.string("name");
+  const char* why = nullptr;
+  if (name.empty())
+    why = "is empty";
+  else if (name == "." || name == "..")
+    why = "is . or ..";
+  else if (name.find('/') != std::string::npos || name.find('\\') != std::string::npos)
+    why = "contains a path separator";
+  else if (std::any_of(name.begin(), name.end(),
+                       [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+    why = "contains a control character";
+  else if (name.size() > 200)
+    why = "is longer than 200 characters";
+  if (why)
+    throw ConfigError("name", "'" + name + "' " + why +
+                                  ": the case name must be a plain name (it names the output "
+                                  "folder out/<name>; give --out to write elsewhere)");
+}
+
+void checkTimeSteps(const Config& cfg, std::vector<std::string>& notes) {
+  const RunMode mode = runMode(cfg);
+  if (mode != RunMode::Coupled && mode != RunMode::DummyDem) return;
+  const double dtf = cfg.number("fluid.dt"), dtp = cfg.number("particles.dt");
+  const long long sub = cfg.integer("coupling.dem_substeps");
+  const bool adaptive = cfg.boolean("fluid.adaptive_dt");
+  if (sub > 0) {
+    const double step = static_cast<double>(sub) * dtp;
+    if (adaptive || std::fabs(step - dtf) > 1e-9 * step)
+      notes.push_back("coupling.dem_substeps = " + std::to_string(sub) + ": every CFD step is " +
+                      std::to_string(sub) + " x particles.dt = " + num(step) +
+                      " s; fluid.dt = " + num(dtf) + " s" +
+                      (adaptive ? " and fluid.adaptive_dt are" : " is") + " not used");
+    return;
+  }
+  if (adaptive) {
+    notes.push_back(
+        "fluid.adaptive_dt: each CFD step is the fluid's step rounded down to a "
+        "whole number of particles.dt = " +
+        num(dtp) + " s (at least one)");
+    return;
+  }
+  const double ratio = dtf / dtp;
+  const double n = std::round(ratio);
+  if (n >= 1 && std::fabs(ratio - n) <= 1e-9 * ratio) return;
+  const double lo = std::max(1.0, std::floor(ratio));
+  std::string use = num(lo * dtp) + " s (" + num(lo) + (lo == 1 ? " DEM step)" : " DEM steps)");
+  if (ratio > 1) use += " or " + num((lo + 1) * dtp) + " s (" + num(lo + 1) + ")";
+  throw ConfigError("fluid.dt", num(dtf) + " s is not a whole multiple of particles.dt = " +
+                                    num(dtp) + " s (" + num(ratio) +
+                                    " DEM steps): a CFD step is a whole number of DEM steps; "
+                                    "use fluid.dt = " +
+                                    use + ", or set coupling.dem_substeps");
+}
+
+void checkBoundaries(const Config& cfg, std::vector<std::string>& notes) {
+  if (runMode(cfg) == RunMode::ParticlesOnly) return;
+  fv::checkBoundaryConfig(cfg, gridFromConfig(cfg));  // types and periodicity first
+  std::string inlet;
+  bool outlet = false;
+  const char* const periodicKey[3] = {"domain.periodic.x", "domain.periodic.y",
+                                      "domain.periodic.z"};
+  for (int i = 0; i < 6; ++i) {
+    const char* f = kFaces[i];
+    const std::string type =
+        cfg.at(std::string("fluid.boundary.") + f).at("type").get<std::string>();
+    // (an inlet on a periodic face is refused with its own message when the fluid is built)
+    if (type == "inlet" && inlet.empty() && !cfg.boolean(periodicKey[i / 2]))
+      inlet = std::string("fluid.boundary.") + f;
+    if (type == "outlet") outlet = true;
+  }
+  // Patches (fluid.patches) are inlets and outlets too, on faces that are not periodic.
+  const Json patches = cfg.has("fluid.patches") ? cfg.at("fluid.patches") : Json::array();
+  for (std::size_t k = 0; k < patches.size(); ++k) {
+    const std::string type = patches[k].at("type").get<std::string>();
+    if (type == "inlet" && inlet.empty()) inlet = "fluid.patches." + std::to_string(k);
+    if (type == "outlet") outlet = true;
+  }
+  if (!inlet.empty() && !outlet)
+    throw ConfigError(inlet,
+                      "an inlet but no outlet on any face: the inflow has nowhere to go "
+                      "(incompressible fluid); make a face an outlet (type outlet) or add an outlet patch");
+  if (runMode(cfg) == RunMode::FluidOnly && cfg.at("particles.sources").size() > 0)
+    notes.push_back("run.mode = fluid: particles.sources are not used");
+}
+
+}  // namespace
+
+std::vector<std::string> checkCase(const Config& cfg) {
+  std::vector<std::string> notes;
+  checkName(cfg);
+  checkTimeSteps(cfg, notes);
+  checkBoundaries(cfg, notes);
+  if (cfg.integer("run.steps") > 0 && cfg.number("run.end_time") > 0)
+    notes.push_back("run.steps = " + std::to_string(cfg.integer("run.steps")) +
+                    " is given: run.end_time is not used");
+  return notes;
+}
+
+double sourceParticleCount(const Config& cfg) {
+  double n = 0;
+  for (const auto& s : cfg.at("particles.sources")) {
+    const std::string type = s.at("type").get<std::string>();
+    if (type == "list")
+      n += static_cast<double>(s.at("positions").size() / 3);
+    else if (type == "lattice")
+      n += s.at("counts")[0].get<double>() * s.at("counts")[1].get<double>() *
+           s.at("counts")[2].get<double>();
+    else if (s.contains("count"))
+      n += s.at("count").get<double>();
+  }
+  return n;
+}
+
+// Coefficients: peak RSS of 1-rank runs of tests/robustness/cases/bed.json (fluid only at 16^3,
+// 48^3, 80^3 cells; particles only at 1e3, 3e4, 1e5 particles; coupled at 48^3 + 2e4) and of
+// bench/cases/case3-small.json on 2 ranks (a dense bed: 400 B a particle). docs/case-files.md.
+constexpr double kBaseBytes = 24e6;
+constexpr double kFluidBytesPerCell = 434;     // per ghosted cell, hypre included
+constexpr double kCouplingBytesPerCell = 118;  // per ghosted cell
+constexpr double kParticleBytes = 400;         // per particle
+
+MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particles) {
+  MemoryEstimate m;
+  const RunMode mode = runMode(cfg);
+  m.cells = 1LL * blockCells[0] * blockCells[1] * blockCells[2];
+  m.ghostedCells = 1LL * (blockCells[0] + 4) * (blockCells[1] + 4) * (blockCells[2] + 4);
+  m.particles = mode == RunMode::FluidOnly ? 0.0 : particles;
+  m.baseBytes = kBaseBytes;
+  const double g = static_cast<double>(m.ghostedCells);
+  if (mode != RunMode::ParticlesOnly) m.fluidBytes = kFluidBytesPerCell * g;
+  if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
+    m.couplingBytes = kCouplingBytesPerCell * g;
+  m.particleBytes = kParticleBytes * m.particles;
+  return m;
+}
+
+Int3 largestUniformBlock(const Config& cfg, int ranks) {
+  const GlobalGrid g = gridFromConfig(cfg);
+  const auto d = cfg.intVec3("partition.dims");
+  const Int3 dims = Decomposition::chooseDims(
+      ranks, g, {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])});
+  Int3 b{};
+  for (int a = 0; a < 3; ++a) b[a] = (g.cells[a] + std::max(dims[a], 1) - 1) / std::max(dims[a], 1);
+  return b;
+}
+
+double memoryLimitPerRank(const Config& cfg, int ranksOnNode, std::string* how) {
+  const double gib = 1024.0 * 1024.0 * 1024.0;
+  const double key = cfg.number("run.memory_limit");
+  if (key > 0) {
+    if (how) *how = "run.memory_limit = " + num(key) + " GiB a rank";
+    return key * gib;
+  }
+  std::ifstream in("/proc/meminfo");
+  std::string line;
+  double kb = 0;
+  while (std::getline(in, line))
+    if (line.rfind("MemAvailable:", 0) == 0) {
+      std::istringstream(line.substr(13)) >> kb;
+      break;
+    }
+  if (!(kb > 0)) {
+    if (how) *how = "unknown (no MemAvailable in /proc/meminfo)";
+    return 0;
+  }
+  const double avail = kb * 1024.0;
+  if (how)
+    *how = "MemAvailable " + bytesText(avail) + " / " + std::to_string(ranksOnNode) +
+           " rank(s) on this node";
+  return avail / std::max(ranksOnNode, 1);
+}
+
+std::string bytesText(double b) {
+  char s[64];
+  if (b >= 1024.0 * 1024 * 1024 * 1024 * 10)
+    std::snprintf(s, sizeof s, "%.3g TiB", b / (1024.0 * 1024 * 1024 * 1024));
+  else if (b >= 1024.0 * 1024 * 1024)
+    std::snprintf(s, sizeof s, "%.2f GiB", b / (1024.0 * 1024 * 1024));
+  else
+    std::snprintf(s, sizeof s, "%.1f MiB", b / (1024.0 * 1024));
+  return s;
+}
+
+void checkMemory(const Comm& world, const Config& cfg) {
+  // Same inputs on every rank except the node's memory: the verdict is made collective below.
+  std::string err;
+  try {
+    const MemoryEstimate m = estimateMemory(cfg, largestUniformBlock(cfg, world.size()),
+                                            sourceParticleCount(cfg) / world.size());
+    MPI_Comm node;
+    MPI_Comm_split_type(world.raw(), MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+    int onNode = 1;
+    MPI_Comm_size(node, &onNode);
+    MPI_Comm_free(&node);
+    std::string how;
+    const double limit = memoryLimitPerRank(cfg, onNode, &how);
+    if (limit > 0 && m.total() > limit) {
+      char cells[96];
+      std::snprintf(cells, sizeof cells, "%lld cells", m.cells);
+      err = "domain.cells, particles.sources: the case needs about " + bytesText(m.total()) +
+            " a rank (" + cells + " in the largest block: fluid " + bytesText(m.fluidBytes) +
+            ", coupling " + bytesText(m.couplingBytes) + "; " + num(m.particles) +
+            " particles: " + bytesText(m.particleBytes) + "; base " + bytesText(m.baseBytes) +
+            "), the machine offers " + bytesText(limit) + " (" + how +
+            "): use fewer cells or particles, more ranks or nodes, or set run.memory_limit (GiB) "
+            "if the estimate is wrong";
+    }
+  } catch (const Error& e) {
+    err = e.what();
+  }
+  // Every rank reaches this point; a refusal on any node stops all of them.
+  const int bad = world.max(err.empty() ? 0 : 1);
+  if (!bad) return;
+  const int first = world.min(err.empty() ? world.size() : world.rank());
+  throw Error(world.broadcast(world.rank() == first ? err : std::string(), first));
+}
+
+}  // namespace coloc::coupling
