@@ -690,8 +690,9 @@ void Simulation::writeOutput(OutputWriter& out) {
       fluid_->cellVelocity(uCell_);
     }
     out.writeFields(steps_, time_,
-                    {OutputField::scalar("p", f.p), OutputField::vector("u", uCell_),
-                     OutputField::scalar("eps", f.eps), OutputField::scalar("K", f.K)});
+                    {OutputField::scalar("p", f.p, "m^2/s^2"),  // kinematic: p / rho
+                     OutputField::vector("u", uCell_, "m/s"), OutputField::scalar("eps", f.eps, "1"),
+                     OutputField::scalar("K", f.K, "1/s")});
   }
   if (dem_ && out.options().particles) {
     const auto& p = dem_->particles();
