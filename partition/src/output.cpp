@@ -19,6 +19,23 @@ void declareOutputConfig(Schema& s) {
   s.boolean("output.particles", true,
             "write the particles (DIR/particles_NNNNNN.h5, particles.xmf)");
   s.string("output.dir", "", "folder of the HDF5/XDMF output (empty: the run's --out folder)");
+  s.integer("output.series_particles", 4,
+            "series.csv follows the particles with ids 0..N-1 (position, velocity, coupling "
+            "force each step)",
+            Range::nonNegative());
+  s.numberList("output.series_particle_ids", std::vector<double>{},
+               "series.csv follows these particle ids instead (e.g. [0, 17, 4711]); empty: "
+               "output.series_particles");
+  s.integer("output.diagnostics_interval", 0,
+            "bed diagnostics (bed height, particle speeds, contacts, pressure drops, solid "
+            "fraction) in series.csv every this many steps and at the last step; 0: on the "
+            "output steps (output.interval_steps), or only the last step without periodic "
+            "output; report.json's 'bed' holds the last",
+            Range::nonNegative());
+  s.boolean("output.snapshot", true,
+            "at the end of a run that writes fields, rank 0 draws the last output to "
+            "snapshot.png in the run's --out folder (bench/scripts/snapshot.py, /usr/bin/python3 "
+            "with h5py and matplotlib); a failure to draw is a warning, not an error");
   s.integer("output.checkpoint_interval", 0,
             "write a restart checkpoint every this many steps, and at the end of the run "
             "(0: none); coloc run CASE --restart FILE continues from one (docs/output.md)",
