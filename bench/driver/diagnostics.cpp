@@ -24,8 +24,10 @@ double kthSmallest(const Comm& comm, std::span<const double> h, long long k, dou
     const double mid = lo + 0.5 * (hi - lo);
     if (!(mid > lo && mid < hi)) break;
     const long long c = countAtMost(mid);
-    if (c >= k) hi = mid;
-    else lo = mid;
+    if (c >= k)
+      hi = mid;
+    else
+      lo = mid;
     if (c == k) break;
   }
   // The largest value <= hi is the k-th smallest.
@@ -53,8 +55,12 @@ BedDiagnostics bedDiagnostics(coupling::Simulation& sim, const Config& cfg) {
   d.axis = axis;
   const int layers = g.cells[axis];
   const double h = g.spacing(axis);
-  auto height = [&](double x) { return up ? x - g.origin[axis] : g.origin[axis] + g.length[axis] - x; };
-  auto layerOf = [&](double z) { return std::clamp(static_cast<int>(std::floor(z / h)), 0, layers - 1); };
+  auto height = [&](double x) {
+    return up ? x - g.origin[axis] : g.origin[axis] + g.length[axis] - x;
+  };
+  auto layerOf = [&](double z) {
+    return std::clamp(static_cast<int>(std::floor(z / h)), 0, layers - 1);
+  };
   double area = 1;
   for (int a = 0; a < 3; ++a)
     if (a != axis) area *= g.length[a];
@@ -73,7 +79,8 @@ BedDiagnostics bedDiagnostics(coupling::Simulation& sim, const Config& cfg) {
       z[i] = height(p.x[axis][i]);
       zmin = std::min(zmin, z[i]);
       zmax = std::max(zmax, z[i]);
-      const double s = std::sqrt(p.v[0][i] * p.v[0][i] + p.v[1][i] * p.v[1][i] + p.v[2][i] * p.v[2][i]);
+      const double s =
+          std::sqrt(p.v[0][i] * p.v[0][i] + p.v[1][i] * p.v[1][i] + p.v[2][i] * p.v[2][i]);
       speedSum += s;
       speedMax = std::max(speedMax, s);
       const double vol = 4.0 / 3.0 * std::numbers::pi * p.radius[i] * p.radius[i] * p.radius[i];
@@ -131,15 +138,23 @@ BedDiagnostics bedDiagnostics(coupling::Simulation& sim, const Config& cfg) {
 }
 
 std::vector<std::string> bedDiagnosticsColumns() {
-  return {"bed_height",      "mean_speed",     "max_speed",        "contacts_per_particle",
-          "dp_bed_pa",       "dp_box_pa",      "dp_bed_excess_pa", "dp_box_excess_pa",
-          "bed_weight_pa",   "solid_fraction_max", "solid_fraction_bed_mean"};
+  return {"bed_height",
+          "mean_speed",
+          "max_speed",
+          "contacts_per_particle",
+          "dp_bed_pa",
+          "dp_box_pa",
+          "dp_bed_excess_pa",
+          "dp_box_excess_pa",
+          "bed_weight_pa",
+          "solid_fraction_max",
+          "solid_fraction_bed_mean"};
 }
 
 std::vector<double> bedDiagnosticsRow(const BedDiagnostics& d) {
-  return {d.bedHeight,   d.meanSpeed,   d.maxSpeed,  d.contactsPerParticle,
-          d.dpBed,       d.dpBox,       d.dpBedExcess, d.dpBoxExcess,
-          d.bedWeight,   d.solidMax,    d.solidBedMean};
+  return {d.bedHeight, d.meanSpeed, d.maxSpeed,    d.contactsPerParticle,
+          d.dpBed,     d.dpBox,     d.dpBedExcess, d.dpBoxExcess,
+          d.bedWeight, d.solidMax,  d.solidBedMean};
 }
 
 Json bedDiagnosticsJson(const BedDiagnostics& d) {

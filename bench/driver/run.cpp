@@ -76,9 +76,9 @@ class Series {
       for (const auto& v : ids) {
         const double x = v.get<double>();
         if (x != std::floor(x) || x < 0 || x >= static_cast<double>(total))
-          throw ConfigError("output.series_particle_ids",
-                            "particle id " + v.dump() + " is not one of the ids 0.." +
-                                std::to_string(total - 1));
+          throw ConfigError(
+              "output.series_particle_ids",
+              "particle id " + v.dump() + " is not one of the ids 0.." + std::to_string(total - 1));
         ids_.push_back(static_cast<long long>(x));
       }
     } else {

@@ -539,8 +539,7 @@ void Simulation::sumDepositsAcrossBlocks() {
   // Across ranks only when a neighbour block is another rank's. On one rank the sum over a
   // periodic wrap is arithmetic inside the block, like the fold at walls: booked to deposition
   // (so a 1-rank run shows no across-ranks share without bytes).
-  ScopedPhase t(timers_,
-                halo_.crossesRanks() ? Phase::ExchangeRemote : Phase::CouplingDeposit);
+  ScopedPhase t(timers_, halo_.crossesRanks() ? Phase::ExchangeRemote : Phase::CouplingDeposit);
   auto& f = fluid_->fields();
   Field3<double>* fields[5] = {&solid_, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
   halo_.scatterSum(fields, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
@@ -697,8 +696,8 @@ void Simulation::writeOutput(OutputWriter& out) {
     }
     out.writeFields(steps_, time_,
                     {OutputField::scalar("p", f.p, "m^2/s^2"),  // kinematic: p / rho
-                     OutputField::vector("u", uCell_, "m/s"), OutputField::scalar("eps", f.eps, "1"),
-                     OutputField::scalar("K", f.K, "1/s")});
+                     OutputField::vector("u", uCell_, "m/s"),
+                     OutputField::scalar("eps", f.eps, "1"), OutputField::scalar("K", f.K, "1/s")});
   }
   if (dem_ && out.options().particles) {
     const auto& p = dem_->particles();

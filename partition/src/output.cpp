@@ -206,9 +206,14 @@ std::string OutputWriter::writeParticles(long long step, double time,
     for (std::size_t i = 0; i < n; ++i) vertex[i] = rows.offset + static_cast<long long>(i);
     writeParticleArray(file, "/vertex", std::span<const std::int64_t>(vertex));
     file.setAttribute("/", "time_units", "s");
-    for (const auto& [ds, units] : std::initializer_list<std::pair<const char*, const char*>>{
-             {"/id", "1"}, {"/x", "m"}, {"/v", "m/s"}, {"/omega", "rad/s"}, {"/radius", "m"},
-             {"/rank", "1"}, {"/vertex", "1"}})
+    for (const auto& [ds, units] :
+         std::initializer_list<std::pair<const char*, const char*>>{{"/id", "1"},
+                                                                    {"/x", "m"},
+                                                                    {"/v", "m/s"},
+                                                                    {"/omega", "rad/s"},
+                                                                    {"/radius", "m"},
+                                                                    {"/rank", "1"},
+                                                                    {"/vertex", "1"}})
       file.setAttribute(ds, "units", units);
     file.close();
   }

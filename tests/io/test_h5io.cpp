@@ -480,9 +480,9 @@ TEST(H5Io, OutputWriterSeries) {
   for (auto& c : x) c.assign(static_cast<std::size_t>(n), 0.5);
   const std::vector<double> r(static_cast<std::size_t>(n), 0.01);
   for (long long step : {0, 5}) {
-    const auto fp = out.writeFields(step, 0.01 * static_cast<double>(step),
-                                    {OutputField::scalar("p", p, "m^2/s^2"),
-                                     OutputField::vector("u", u, "m/s")});
+    const auto fp = out.writeFields(
+        step, 0.01 * static_cast<double>(step),
+        {OutputField::scalar("p", p, "m^2/s^2"), OutputField::vector("u", u, "m/s")});
     EXPECT_EQ(fp, opt.dir + "/fields_00000" + std::to_string(step) + ".h5");
     out.writeParticles(step, 0.01 * static_cast<double>(step), ids, firstRows(x, ids.size()),
                        firstRows(x, ids.size()), firstRows(x, ids.size()), r);
