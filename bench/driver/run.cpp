@@ -75,10 +75,13 @@ class Series {
     if (!ids.empty()) {
       for (const auto& v : ids) {
         const double x = v.get<double>();
-        if (x != std::floor(x) || x < 0 || x >= static_cast<double>(total))
-          throw ConfigError(
-              "output.series_particle_ids",
-              "particle id " + v.dump() + " is not one of the ids 0.." + std::to_string(total - 1));
+        if (x != std::floor(x) || x < 0 || x >= static_cast<double>(total)) {
+          char id[32];
+          std::snprintf(id, sizeof id, "%.17g", x);
+          throw ConfigError("output.series_particle_ids", "particle id " + std::string(id) +
+                                                              " is not one of the ids 0.." +
+                                                              std::to_string(total - 1));
+        }
         ids_.push_back(static_cast<long long>(x));
       }
     } else {
