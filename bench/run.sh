@@ -8,6 +8,7 @@ build=${COLOC_BUILD_DIR:-$root/build}
 "$root/cmake/setup.sh" "$build"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none
+export OMPI_MCA_mpi_yield_when_idle=${OMPI_MCA_mpi_yield_when_idle:-1}  # ranks may share cores (README)
 run() { mpiexec -n "$1" --bind-to none "$build/coloc" run "${@:2}"; }
 
 if [[ $# -ge 1 ]]; then

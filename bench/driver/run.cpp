@@ -2,15 +2,19 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
+#include <optional>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
+#include "diagnostics.hpp"
 
 namespace coloc {
 namespace {
@@ -58,27 +62,55 @@ class Progress {
   double time0_;
 };
 
-/// A per-step time series of the first particles and of coupling totals (series.csv).
+/// A per-step time series (series.csv): coupling totals, the particles of
+/// output.series_particles / output.series_particle_ids, and the bed diagnostics
+/// (diagnostics.hpp) on the steps of output.diagnostics_interval and the last step (empty fields
+/// in the other rows).
 class Series {
  public:
-  Series(const Comm& comm, const std::string& path, coupling::Simulation& sim) : comm_(comm) {
+  Series(const Comm& comm, const std::string& path, coupling::Simulation& sim, const Config& cfg)
+      : comm_(comm), cfg_(cfg) {
     auto* dem = sim.particles();
-    tracked_ = dem ? std::min<long long>(dem->globalCount(), 4) : 0;
+    const long long total = dem ? dem->globalCount() : 0;
+    const Json& ids = cfg.at("output.series_particle_ids");
+    if (!ids.empty()) {
+      for (const auto& v : ids) {
+        const double x = v.get<double>();
+        if (x != std::floor(x) || x < 0 || x >= static_cast<double>(total)) {
+          char id[32];
+          std::snprintf(id, sizeof id, "%.17g", x);
+          throw ConfigError("output.series_particle_ids", "particle id " + std::string(id) +
+                                                              " is not one of the ids 0.." +
+                                                              std::to_string(total - 1));
+        }
+        ids_.push_back(static_cast<long long>(x));
+      }
+    } else {
+      for (long long i = 0; i < std::min<long long>(total, cfg.integer("output.series_particles"));
+           ++i)
+        ids_.push_back(i);
+    }
+    for (std::size_t c = 0; c < ids_.size(); ++c) column_[ids_[c]] = c;
+    diagEvery_ = cfg.integer("output.diagnostics_interval");
+    if (diagEvery_ == 0) diagEvery_ = cfg.integer("output.interval_steps");
     if (!comm_.isRoot()) return;
     out_.open(path);
     out_ << "step,time,solid_volume,fluid_accel_l1";
-    for (long long p = 0; p < tracked_; ++p)
+    for (long long id : ids_)
       for (const char* q : {"x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz"})
-        out_ << ",p" << p << "_" << q;
+        out_ << ",p" << id << "_" << q;
+    for (const auto& c : bedDiagnosticsColumns()) out_ << "," << c;
     out_ << "\n";
   }
-  void record(coupling::Simulation& sim) {
-    std::vector<double> row(static_cast<std::size_t>(9 * tracked_), 0.0);
+  /// One row; the diagnostics when due or at the end of the run. Returns them when computed.
+  std::optional<BedDiagnostics> record(coupling::Simulation& sim) {
+    std::vector<double> row(9 * ids_.size(), 0.0);
     if (auto* dem = sim.particles()) {
       const auto& p = dem->particles();
       for (std::size_t i = 0; i < p.nOwned; ++i) {
-        if (p.id[i] >= tracked_) continue;
-        double* r = row.data() + 9 * p.id[i];
+        const auto it = column_.find(p.id[i]);
+        if (it == column_.end()) continue;
+        double* r = row.data() + 9 * it->second;
         for (int d = 0; d < 3; ++d) {
           r[d] = p.x[d][i];
           r[3 + d] = p.v[d][i];
@@ -87,7 +119,10 @@ class Series {
       }
     }
     comm_.sumInPlace(std::span<double>(row));
-    if (!comm_.isRoot()) return;
+    std::optional<BedDiagnostics> diag;
+    if ((diagEvery_ > 0 && sim.steps() % diagEvery_ == 0) || sim.finished())
+      diag = bedDiagnostics(sim, cfg_);
+    if (!comm_.isRoot()) return diag;
     char buf[64];
     out_ << sim.steps();
     for (double v : {sim.time(), sim.depositedSolidVolume(), sim.fluidAccelerationL1()}) {
@@ -98,7 +133,16 @@ class Series {
       std::snprintf(buf, sizeof buf, ",%.17g", v);
       out_ << buf;
     }
+    if (diag) {
+      for (double v : bedDiagnosticsRow(*diag)) {
+        std::snprintf(buf, sizeof buf, ",%.17g", v);
+        out_ << buf;
+      }
+    } else {
+      out_ << std::string(bedDiagnosticsColumns().size(), ',');
+    }
     out_ << "\n";
+    return diag;
   }
   void flush() {
     if (out_.is_open()) out_.flush();
@@ -106,9 +150,39 @@ class Series {
 
  private:
   const Comm& comm_;
-  long long tracked_ = 0;
+  const Config& cfg_;
+  std::vector<long long> ids_;
+  std::map<long long, std::size_t> column_;
+  long long diagEvery_ = 0;
   std::ofstream out_;
 };
+
+/// output.snapshot: rank 0 runs bench/scripts/snapshot.py on the run's output (a picture of the
+/// last fields and particles, OUT/snapshot.png). Only a warning when it cannot.
+void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet) {
+  const OutputOptions o = outputOptionsFromConfig(cfg, outDir);
+  if (!cfg.boolean("output.snapshot") || !o.fields || o.intervalSteps <= 0) return;
+  namespace fs = std::filesystem;
+  const fs::path script = fs::path(COLOC_SOURCE_DIR) / "bench" / "scripts" / "snapshot.py";
+  const char* python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  auto quote = [](const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  const std::string png = (fs::path(outDir) / "snapshot.png").string();
+  const std::string cmd = std::string(python) + " " + quote(script.string()) + " " + quote(o.dir) +
+                          " --png " + quote(png) + " --report " +
+                          quote((fs::path(outDir) / "report.json").string()) +
+                          (quiet ? " >/dev/null" : "");
+  std::fflush(stdout);
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0)
+    std::fprintf(stderr,
+                 "coloc: warning: no snapshot.png (%s exited with status %d); the run's output "
+                 "is complete (set output.snapshot=false to skip the picture)\n",
+                 script.string().c_str(), rc);
+}
 
 }  // namespace
 
@@ -152,7 +226,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
                   simulation->steps(), simulation->time());
   }
   Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
-  Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation);
+  Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation, cfg);
+  std::optional<BedDiagnostics> lastDiagnostics;
   OutputWriter output(simulation->decomposition(), outputOptionsFromConfig(cfg, outDir));
   simulation->writeOutput(output);
   simulation->beginRun();
@@ -162,7 +237,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
     while (!simulation->finished()) {
       simulation->step();
       simulation->writeOutput(output);
-      series.record(*simulation);
+      if (auto d = series.record(*simulation)) lastDiagnostics = std::move(d);
       if (checkpoint.due(simulation->steps()))
         simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
       if (coupling::rebalanceDue(cfg, simulation->steps())) {
@@ -229,6 +304,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
   report.set("run.setup_s", world.max(setupWall));
   report.set("partition.rebalances", rebalances);
   report.set("run.notes", notes);
+  report.set("bed", bedDiagnosticsJson(lastDiagnostics ? *lastDiagnostics
+                                                       : bedDiagnostics(*simulation, cfg)));
   report.set("run.total_wall_s", world.max(MPI_Wtime() - t0));
   report.addMemory(world);
   const std::string path = report.write(world, outDir);
@@ -244,6 +321,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
         100.0 * j["fractions"]["inter_physics"].get<double>());
     std::printf("coloc: report written to %s\n", path.c_str());
   }
+  if (world.isRoot()) drawSnapshot(cfg, outDir, opts.quiet);
   return 0;
 }
 

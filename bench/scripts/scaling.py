@@ -9,7 +9,10 @@ On a cluster pass the launcher, e.g. --launcher "srun -n {n}" (default
 "mpiexec -n {n} --bind-to none") and --cores (the cores available, for the oversubscription
 mark). Overrides go to every run: --set key=value (repeatable), or key=value ... after --.
 Points with more ranks than --cores (default: this machine's) are marked "oversubscribed" in
-the CSV and shaded on the plots. --plot-only re-plots an existing scaling.csv.
+the CSV and shaded on the plots (and run with OMPI_MCA_mpi_yield_when_idle=1 unless the
+environment sets it). --plot-only re-plots an existing scaling.csv. Lines are the fastest
+repeat, bands the min-max over the repeats; a share of exactly 0 is drawn as a cross at the
+floor of the log axis and named in the legend.
 
 Outputs (in --out, default bench/results/<case name>/): scaling.csv (one row per run; per-run
 folders under runs/, not committed), speedup.png (each mode's speedup over its smallest rank
@@ -45,6 +48,9 @@ def run_point(args, n, mode, rep):
         cmd += ["--set", s]
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1",
+               # more ranks than cores: waiting ranks yield their core (README, "Containers")
+               OMPI_MCA_mpi_yield_when_idle=os.environ.get(
+                   "OMPI_MCA_mpi_yield_when_idle", "1" if n > args.cores else "0"),
                OMPI_MCA_btl_vader_single_copy_mechanism=os.environ.get(
                    "OMPI_MCA_btl_vader_single_copy_mechanism", "none"))
     print("scaling:", " ".join(cmd), flush=True)
@@ -91,23 +97,37 @@ def best(rows, mode):
     return [out[n] for n in sorted(out)]
 
 
+def spread(rows, mode, key):
+    """Per rank count (sorted), the min and max of key over the repeats."""
+    by = {}
+    for r in rows:
+        if r["mode"] == mode:
+            by.setdefault(r["ranks"], []).append(r[key])
+    ns = sorted(by)
+    return ns, [min(by[n]) for n in ns], [max(by[n]) for n in ns]
+
+
+def shares_without_bytes(rows):
+    """Rows whose across-ranks inter-physics share is non-zero with no byte sent across ranks."""
+    return [r for r in rows if r.get("frac_inter_remote", 0) > 0 and r.get("inter_remote_bytes", 0) == 0]
+
+
 COUPLED_MODES = (("coupled", "o-"), ("dummy_dem", "d-."))
 
 
 def shade_oversubscribed(ax, rows, cores):
-    """Grey band and a label over the rank counts beyond this machine's cores."""
+    """Grey band over the rank counts beyond this machine's cores, named in the legend."""
     over = sorted({r["ranks"] for r in rows if r["oversubscribed"]})
     if not over:
         return
-    ax.axvspan(cores + 0.5, max(over) + 0.5, color="0.88", zorder=0)
-    ax.text(cores + 0.55, 0.97, f"oversubscribed\n(> {cores} cores)", transform=ax.get_xaxis_transform(),
-            va="top", ha="left", fontsize=8, color="0.3")
+    ax.axvspan(cores + 0.5, max(over) + 0.5, color="0.88", zorder=0,
+               label=f"oversubscribed (> {cores} cores)")
 
 
 def plot(rows, args, cores):
     name = os.path.basename(args.case).replace(".json", "")
-    note = f"\n(ranks > {cores} oversubscribed on this {cores}-core machine)" \
-        if any(r["oversubscribed"] for r in rows) else ""
+    reps = max(int(r.get("repeat", 0)) for r in rows) + 1
+    band = f"; bands: min-max of {reps} repeats" if reps > 1 else ""
     ns = sorted({r["ranks"] for r in rows})
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     for mode, style in (("coupled", "o-"), ("dummy_dem", "d-."), ("fluid", "s--"), ("particles", "^:")):
@@ -117,13 +137,17 @@ def plot(rows, args, cores):
         base = pts[0]["s_per_step"] * pts[0]["ranks"]
         label = {"fluid": "fluid only (CFD)", "particles": "particles only (DEM)",
                  "dummy_dem": "coupled, DummyDEM"}.get(mode, mode)
-        ax.plot([p["ranks"] for p in pts], [base / p["s_per_step"] for p in pts], style, label=label)
+        line, = ax.plot([p["ranks"] for p in pts], [base / p["s_per_step"] for p in pts], style,
+                        label=label)
+        x, lo, hi = spread(rows, mode, "s_per_step")
+        ax.fill_between(x, [base / h for h in hi], [base / l for l in lo], color=line.get_color(),
+                        alpha=0.2, lw=0)
     ax.plot(ns, ns, "k-", lw=0.5, label="ideal")
     shade_oversubscribed(ax, rows, cores)
     ax.set_xticks(ns)
     ax.set_xlabel("MPI ranks")
-    ax.set_ylabel("speedup (fastest of the repeats)")
-    ax.set_title(f"{name}: strong scaling{note}", fontsize=9)
+    ax.set_ylabel("speedup: (ranks x s/step) at the fewest ranks / s/step")
+    ax.set_title(f"{name}: strong scaling (line: fastest repeat{band})", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
@@ -133,48 +157,69 @@ def plot(rows, args, cores):
     present = [(m, st) for m, st in COUPLED_MODES if best(rows, m)]
     if not present:
         return
-    fig, axes = plt.subplots(1, len(present), figsize=(6.4 * len(present), 4.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(present), figsize=(6.4 * len(present), 5.2), squeeze=False)
     for ax, (mode, _) in zip(axes[0], present):
         pts = best(rows, mode)
         x = [p["ranks"] for p in pts]
         for key, label, st in (("frac_fv", "fluid", "s--"), ("frac_dem", "particles", "^:"),
                                ("frac_coupling", "coupling arithmetic", "o-"),
                                ("frac_inter_physics", "inter-physics exchange", "d-")):
-            ax.plot(x, [100 * p[key] for p in pts], st, label=label)
+            line, = ax.plot(x, [100 * p[key] for p in pts], st, label=label)
+            xs, lo, hi = spread(rows, mode, key)
+            ax.fill_between(xs, [100 * v for v in lo], [100 * v for v in hi], color=line.get_color(),
+                            alpha=0.2, lw=0)
         shade_oversubscribed(ax, rows, cores)
         ax.set_xticks(x)
         ax.set_xlabel("MPI ranks")
-        ax.set_ylabel(f"share of the {mode} step (%)")
-        ax.set_title(f"{name}, {mode}: time shares{note}", fontsize=9)
+        ax.set_ylabel(f"phase time / {mode} run wall time (%)")
+        ax.set_title(f"{name}, {mode}: time shares, mean over ranks\n(fastest repeat{band})", fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "shares.png"), dpi=120)
     plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(7.2, 6.0))
+    fig, ax = plt.subplots(figsize=(7.2, 6.4))
+    positive = [100 * r[k] for r in rows for k in ("frac_inter_physics", "frac_inter_local", "frac_inter_remote")
+                if r.get(k, 0) > 0]
+    floor = min(positive + [0.1]) / 10
+    zeros = False
     for mode, st in present:
         pts = best(rows, mode)
         x = [p["ranks"] for p in pts]
         c = "C0" if mode == "coupled" else "C1"
-        ax.plot(x, [max(100 * p["frac_inter_physics"], 1e-4) for p in pts], st[0] + "-", color=c,
-                label=f"{mode}: total")
-        if "frac_inter_local" in pts[0]:
-            ax.plot(x, [max(100 * p["frac_inter_local"], 1e-4) for p in pts], st[0] + ":", color=c,
-                    mfc="none", label=f"{mode}: inside a rank (co-located)")
-            ax.plot(x, [max(100 * p["frac_inter_remote"], 1e-4) for p in pts], st[0] + "--", color=c,
-                    mfc="none", label=f"{mode}: across ranks (reverse halo sum, incl. waiting)")
+        for key, ls, what in (("frac_inter_physics", "-", "total"),
+                              ("frac_inter_local", ":", "inside a rank (co-located)"),
+                              ("frac_inter_remote", "--", "across ranks (reverse halo sum, incl. waiting)")):
+            if key not in pts[0]:
+                continue
+            y = [100 * p[key] for p in pts]
+            # a zero cannot sit on a log axis: drawn as a cross on the floor, and said so
+            ax.plot([xi for xi, yi in zip(x, y) if yi > 0], [yi for yi in y if yi > 0], st[0] + ls,
+                    color=c, mfc="none" if key != "frac_inter_physics" else c, label=f"{mode}: {what}")
+            z = [xi for xi, yi in zip(x, y) if yi == 0]
+            if z:
+                zeros = True
+                ax.plot(z, [floor] * len(z), "x", color=c, ms=8)
+            xs, lo, hi = spread(rows, mode, key)
+            keep = [i for i in range(len(xs)) if lo[i] > 0]
+            if len(keep) > 1:
+                ax.fill_between([xs[i] for i in keep], [100 * lo[i] for i in keep],
+                                [100 * hi[i] for i in keep], color=c, alpha=0.12, lw=0)
+    if zeros:
+        ax.plot([], [], "kx", label=f"exactly 0 (no time booked; drawn at {floor:g} %)")
     ax.axhline(0.1, color="r", ls="--", lw=0.8, label="0.1 % (paper, case 3)")
     ax.axhline(1.0, color="0.5", ls=":", lw=0.8, label="1 % (paper, case 2)")
     shade_oversubscribed(ax, rows, cores)
     ax.set_yscale("log")
+    ax.set_ylim(bottom=floor / 2)
     ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
     ax.set_xticks(ns)
     ax.set_xlabel("MPI ranks")
-    ax.set_ylabel("inter-physics exchange (% of the step)")
-    ax.set_title(f"{name}: inter-physics exchange share{note}", fontsize=9)
+    ax.set_ylabel("inter-physics exchange wall time / run wall time (%)")
+    ax.set_title(f"{name}: inter-physics exchange share (fastest repeat{band})", fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "inter_physics.png"), dpi=120)
     plt.close(fig)
@@ -220,6 +265,10 @@ def main():
             w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
             w.writeheader()
             w.writerows(rows)
+    bad = shares_without_bytes(rows)
+    if bad:
+        print("scaling: warning: an across-ranks share without bytes in", len(bad), "rows, e.g.",
+              bad[0], file=sys.stderr)
     plot(rows, args, args.cores)
     print(f"scaling: wrote {csv_path} and plots in {args.out}")
 

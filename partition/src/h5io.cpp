@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -507,10 +508,11 @@ std::string xmlEscape(const std::string& s) {
   return o;
 }
 
+// Shortest text that reads back as exactly v (0.005, not 0.0050000000000000001).
 std::string num(double v) {
   char b[32];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
 }
 
 }  // namespace
@@ -901,8 +903,12 @@ std::string XdmfSeries::xml() const {
     o << "   <Grid Name=\"" << xmlEscape(name_) << "_" << s.step << "\" GridType=\"Uniform\">\n"
       << "    <Time Value=\"" << num(s.time) << "\"/>\n";
     if (particles_) {
+      // N one-point cells. The explicit connectivity matters: without it the Xdmf3 readers
+      // (ParaView's default) make the N points but no cells, and Surface shows nothing.
       o << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
-        << "\" NodesPerElement=\"1\"/>\n"
+        << "\" NodesPerElement=\"1\">\n";
+      dataItem(n + " 1", "Int", 8, s.connectivity);
+      o << "    </Topology>\n"
         << "    <Geometry GeometryType=\"XYZ\">\n";
       dataItem(n + " 3", "Float", 8, s.geometry);
       o << "    </Geometry>\n";

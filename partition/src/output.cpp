@@ -2,7 +2,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
 #include <set>
+#include <utility>
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/report.hpp"
@@ -17,6 +19,23 @@ void declareOutputConfig(Schema& s) {
   s.boolean("output.particles", true,
             "write the particles (DIR/particles_NNNNNN.h5, particles.xmf)");
   s.string("output.dir", "", "folder of the HDF5/XDMF output (empty: the run's --out folder)");
+  s.integer("output.series_particles", 4,
+            "series.csv follows the particles with ids 0..N-1 (position, velocity, coupling "
+            "force each step)",
+            Range::nonNegative());
+  s.numberList("output.series_particle_ids", std::vector<double>{},
+               "series.csv follows these particle ids instead (e.g. [0, 17, 4711]); empty: "
+               "output.series_particles");
+  s.integer("output.diagnostics_interval", 0,
+            "bed diagnostics (bed height, particle speeds, contacts, pressure drops, solid "
+            "fraction) in series.csv every this many steps and at the last step; 0: on the "
+            "output steps (output.interval_steps), or only the last step without periodic "
+            "output; report.json's 'bed' holds the last",
+            Range::nonNegative());
+  s.boolean("output.snapshot", true,
+            "at the end of a run that writes fields, rank 0 draws the last output to "
+            "snapshot.png in the run's --out folder (bench/scripts/snapshot.py, /usr/bin/python3 "
+            "with h5py and matplotlib); a failure to draw is a warning, not an error");
   s.integer("output.checkpoint_interval", 0,
             "write a restart checkpoint every this many steps, and at the end of the run "
             "(0: none); coloc run CASE --restart FILE continues from one (docs/output.md)",
@@ -121,6 +140,7 @@ std::string OutputWriter::writeFields(long long step, double time,
   {
     H5File file = H5File::create(dec.comm(), path);
     file.setAttribute("/", "time", time);
+    file.setAttribute("/", "time_units", "s");
     file.setAttribute("/", "step", step);
     const auto& g = dec.grid();
     const double cells[3] = {double(g.cells[0]), double(g.cells[1]), double(g.cells[2])};
@@ -128,12 +148,14 @@ std::string OutputWriter::writeFields(long long step, double time,
     file.setAttribute("/", "origin", std::span<const double>(g.origin));
     file.setAttribute("/", "spacing", std::span<const double>(spacing));
     file.setAttribute("/", "cells", std::span<const double>(cells));
+    file.setAttribute("/", "length_units", "m");
     for (const auto& f : fields) {
       const std::string ds = "/" + f.name;
       if (f.isVector())
         writeCellVector(file, ds, dec, *f.c[0], *f.c[1], *f.c[2]);
       else
         writeCellField(file, ds, dec, *f.c[0]);
+      if (!f.units.empty()) file.setAttribute(ds, "units", f.units);
       entry.attributes.push_back({f.name, f.isVector(), ds});
     }
     file.close();
@@ -163,6 +185,7 @@ std::string OutputWriter::writeParticles(long long step, double time,
   entry.step = step;
   entry.file = name;
   entry.geometry = "/x";
+  entry.connectivity = "/vertex";
   {
     H5File file = H5File::create(dec.comm(), path);
     const long long total = dec.comm().sum(static_cast<long long>(n));
@@ -177,6 +200,21 @@ std::string OutputWriter::writeParticles(long long step, double time,
     writeParticleArray(file, "/radius", radius);
     const std::vector<int> rank(n, dec.rank());
     writeParticleArray(file, "/rank", std::span<const int>(rank));
+    // The global row index of each particle: the connectivity of N one-point cells.
+    const RowRange rows = rowsOf(dec.comm(), static_cast<long long>(n));
+    std::vector<std::int64_t> vertex(n);
+    for (std::size_t i = 0; i < n; ++i) vertex[i] = rows.offset + static_cast<long long>(i);
+    writeParticleArray(file, "/vertex", std::span<const std::int64_t>(vertex));
+    file.setAttribute("/", "time_units", "s");
+    for (const auto& [ds, units] :
+         std::initializer_list<std::pair<const char*, const char*>>{{"/id", "1"},
+                                                                    {"/x", "m"},
+                                                                    {"/v", "m/s"},
+                                                                    {"/omega", "rad/s"},
+                                                                    {"/radius", "m"},
+                                                                    {"/rank", "1"},
+                                                                    {"/vertex", "1"}})
+      file.setAttribute(ds, "units", units);
     file.close();
   }
   entry.attributes = {{"id", false, "/id", "Int", 8},

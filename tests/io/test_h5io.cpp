@@ -431,8 +431,9 @@ TEST(H5Io, XdmfIndex) {
            "f_" + std::to_string(step) + ".h5",
            0,
            "",
-           {{"p", false, "/p"}, {"u", true, "/u"}}});
-  s.add({1.0, 10, "again.h5", 0, "", {}});  // a restart from step 10 replaces 10 and 20
+           {{"p", false, "/p"}, {"u", true, "/u"}},
+           ""});
+  s.add({1.0, 10, "again.h5", 0, "", {}, ""});  // a restart from step 10 replaces 10 and 20
   ASSERT_EQ(s.steps().size(), 2u);
   EXPECT_EQ(s.steps()[1].file, "again.h5");
   const std::string x = s.xml();
@@ -442,8 +443,15 @@ TEST(H5Io, XdmfIndex) {
   EXPECT_NE(x.find(">2 -1 0.5<"), std::string::npos) << "origin in z y x order";
   EXPECT_NE(x.find("f_0.h5:/p"), std::string::npos);
   auto pts = XdmfSeries::particles("particles");
-  pts.add({0.5, 3, "p.h5", 17, "/x", {{"id", false, "/id", "Int", 8}}});
+  pts.add({0.005, 3, "p.h5", 17, "/x", {{"id", false, "/id", "Int", 8}}, "/vertex"});
   const std::string y = pts.xml();
+  // Times as the shortest text that reads back exactly (not 0.0050000000000000001).
+  EXPECT_NE(y.find("<Time Value=\"0.005\"/>"), std::string::npos) << y;
+  // N one-point cells with an explicit connectivity (the Xdmf3 readers make no cells without).
+  EXPECT_NE(y.find("NodesPerElement=\"1\">\n     <DataItem Dimensions=\"17 1\" NumberType=\"Int\" "
+                   "Precision=\"8\" Format=\"HDF\">p.h5:/vertex</DataItem>\n    </Topology>"),
+            std::string::npos)
+      << y;
   EXPECT_NE(y.find("TopologyType=\"Polyvertex\" NumberOfElements=\"17\""), std::string::npos);
   EXPECT_NE(
       y.find("Dimensions=\"17 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">p.h5:/x"),
@@ -472,8 +480,9 @@ TEST(H5Io, OutputWriterSeries) {
   for (auto& c : x) c.assign(static_cast<std::size_t>(n), 0.5);
   const std::vector<double> r(static_cast<std::size_t>(n), 0.01);
   for (long long step : {0, 5}) {
-    const auto fp = out.writeFields(step, 0.01 * static_cast<double>(step),
-                                    {OutputField::scalar("p", p), OutputField::vector("u", u)});
+    const auto fp = out.writeFields(
+        step, 0.01 * static_cast<double>(step),
+        {OutputField::scalar("p", p, "m^2/s^2"), OutputField::vector("u", u, "m/s")});
     EXPECT_EQ(fp, opt.dir + "/fields_00000" + std::to_string(step) + ".h5");
     out.writeParticles(step, 0.01 * static_cast<double>(step), ids, firstRows(x, ids.size()),
                        firstRows(x, ids.size()), firstRows(x, ids.size()), r);
@@ -493,6 +502,20 @@ TEST(H5Io, OutputWriterSeries) {
   CellField back(cellLayout(dec, 1), kSentinel);
   readCellField(f, "/p", dec, back);
   EXPECT_EQ(countCellMismatches(dec, back), 0);
+  EXPECT_EQ(f.attributeString("/p", "units"), "m^2/s^2");
+  EXPECT_EQ(f.attributeString("/u", "units"), "m/s");
+  EXPECT_EQ(f.attributeString("/", "time_units"), "s");
+  {
+    // The vertex list is the global row index 0..N-1 (the cells of the XDMF topology).
+    H5File pf = H5File::openRead(w, opt.dir + "/particles_000005.h5");
+    const RowRange rows = rowsOf(w, n);
+    const auto vertex = readParticleArray<std::int64_t>(pf, "/vertex", rows);
+    ASSERT_EQ(vertex.size(), static_cast<std::size_t>(n));
+    for (std::size_t i = 0; i < vertex.size(); ++i)
+      EXPECT_EQ(vertex[i], rows.offset + static_cast<long long>(i));
+    EXPECT_EQ(pf.attributeString("/v", "units"), "m/s");
+    EXPECT_EQ(pf.attributeString("/x", "units"), "m");
+  }
   // disabled series write nothing
   OutputWriter off(dec, OutputOptions{0, false, false, scratch("never")});
   EXPECT_EQ(off.writeFields(1, 0.0, {OutputField::scalar("p", p)}), "");

@@ -160,13 +160,15 @@ struct XdmfStep {
   long long count = 0;   // particles of this step (particle series)
   std::string geometry;  // dataset of the [N][3] positions (particle series)
   std::vector<XdmfAttribute> attributes;
+  std::string connectivity;  // dataset of the [N] vertex indices 0..N-1 (particle series)
 };
 
 class XdmfSeries {
  public:
   /// Cell data on the grid: 3DCoRectMesh, Center="Cell".
   static XdmfSeries cells(std::string name, const GlobalGrid& grid);
-  /// Particles: Polyvertex topology, XYZ geometry, Center="Node".
+  /// Particles: Polyvertex topology of N one-point cells (explicit connectivity), XYZ geometry,
+  /// Center="Node".
   static XdmfSeries particles(std::string name);
 
   /// Append a step; entries with step >= s.step are dropped first (a rewritten or restarted

@@ -48,6 +48,9 @@ class HaloPlan {
 
   /// Bytes this rank sends in one gather of one field (for reports and benchmarks).
   long long bytesPerGather() const;
+  /// True when some neighbour is another rank. A block that is only its own neighbour (periodic
+  /// axes on one rank) copies in memory: its sweeps book no exchange time (nothing is sent).
+  bool crossesRanks() const;
 
  private:
   struct Side {

@@ -2,7 +2,7 @@
 // HDF5, one file per output time, and one XDMF index per series for ParaView (docs/output.md).
 //
 //   DIR/fields_NNNNNN.h5      one dataset per field: scalar [nz][ny][nx], vector [nz][ny][nx][3]
-//   DIR/particles_NNNNNN.h5   id, x, v, omega, radius, rank  ([N] or [N][3])
+//   DIR/particles_NNNNNN.h5   id, x, v, omega, radius, rank  ([N] or [N][3]), vertex [N]
 //   DIR/fields.xmf, DIR/particles.xmf   temporal collections of every output so far
 //
 // NNNNNN is the step (zero-padded to 6 digits, more if needed). Each .h5 is written through
@@ -60,20 +60,23 @@ CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::stri
 /// Where a failed run's state goes: "DIR/checkpoint.h5" -> "DIR/checkpoint.failed.h5".
 std::string failedCheckpointPath(const std::string& path);
 
-/// A cell field to write: a scalar (c[0]) or a 3-vector (c[0..2]).
+/// A cell field to write: a scalar (c[0]) or a 3-vector (c[0..2]). `units` (e.g. "m/s", "1" for
+/// a dimensionless field) goes into the dataset's `units` attribute; empty: no attribute.
 struct OutputField {
   std::string name;
   std::array<const CellField*, 3> c{};
+  std::string units;
   bool isVector() const { return c[1] != nullptr; }
-  static OutputField scalar(std::string name, const CellField& f) {
-    return {std::move(name), {&f, nullptr, nullptr}};
+  static OutputField scalar(std::string name, const CellField& f, std::string units = {}) {
+    return {std::move(name), {&f, nullptr, nullptr}, std::move(units)};
   }
   static OutputField vector(std::string name, const CellField& x, const CellField& y,
-                            const CellField& z) {
-    return {std::move(name), {&x, &y, &z}};
+                            const CellField& z, std::string units = {}) {
+    return {std::move(name), {&x, &y, &z}, std::move(units)};
   }
-  static OutputField vector(std::string name, const std::array<CellField, 3>& v) {
-    return vector(std::move(name), v[0], v[1], v[2]);
+  static OutputField vector(std::string name, const std::array<CellField, 3>& v,
+                            std::string units = {}) {
+    return vector(std::move(name), v[0], v[1], v[2], std::move(units));
   }
 };
 
@@ -96,7 +99,8 @@ class OutputWriter {
   std::string writeFields(long long step, double time, const std::vector<OutputField>& fields);
 
   /// Writes this rank's particles (all spans of one length, e.g. the owned particles) to
-  /// DIR/particles_NNNNNN.h5 with the owning rank, and rewrites DIR/particles.xmf; returns the
+  /// DIR/particles_NNNNNN.h5 with the owning rank and the vertex list (/vertex: the row index,
+  /// the XDMF topology's connectivity), and rewrites DIR/particles.xmf; returns the
   /// .h5 path. Does nothing (returns "") when options().particles is false.
   std::string writeParticles(long long step, double time, std::span<const std::int64_t> id,
                              Vec3Span x, Vec3Span v, Vec3Span omega,

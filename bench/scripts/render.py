@@ -1,0 +1,186 @@
+"""The standard ParaView pictures of a run, with ParaView's default readers (docs/output.md).
+
+    pvpython --force-offscreen-rendering bench/scripts/render.py OUT_DIR [--time T] [--png-dir D]
+
+Opens OUT_DIR/fields.xmf and OUT_DIR/particles.xmf as File > Open does (OpenDataFile: the Xdmf3
+reader) at time T (default: the last output) and writes, to D (default OUT_DIR):
+
+  render_eps.png        the fluid fraction eps on the mid-plane that contains the vertical axis
+  render_speed.png      the fluid speed |u| (m/s) on that plane
+  render_particles.png  the particles as spheres of their true radius coloured by |v| (m/s), in
+                        front of the eps plane
+
+The vertical axis is the case's gravity (report.json), else the longest axis. Exit status 0 when
+the three PNGs are written; 1 with a message when a file has no data (e.g. particles read as
+points without cells).
+"""
+import argparse
+import json
+import os
+import sys
+
+from paraview.simple import (ColorBy, CreateView, Delete, GetColorTransferFunction,
+                             GetScalarBar, OpenDataFile, Render, ResetCamera, SaveScreenshot,
+                             Show, Slice, Text)
+
+
+def vertical_axis(report, length):
+    try:
+        with open(report) as f:
+            g = json.load(f)["config"]["gravity"]
+        a = max(range(3), key=lambda d: abs(g[d]))
+        if g[a] != 0:
+            return a, (1 if g[a] < 0 else -1)
+    except (OSError, KeyError, ValueError, TypeError, IndexError):
+        pass
+    return max(range(3), key=lambda d: length[d]), 1
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out_dir")
+    ap.add_argument("--time", type=float, help="simulated time (s); default: the last output")
+    ap.add_argument("--png-dir", help="folder of the PNGs (default: OUT_DIR)")
+    ap.add_argument("--size", type=int, nargs=2, default=[900, 900], help="pixels (width height)")
+    args = ap.parse_args()
+    out = os.path.abspath(args.out_dir)
+    png_dir = os.path.abspath(args.png_dir or out)
+    case = os.path.basename(out)
+
+    fields = OpenDataFile(os.path.join(out, "fields.xmf"))
+    times = list(fields.TimestepValues) if hasattr(fields.TimestepValues, "__len__") \
+        else [fields.TimestepValues]
+    t = args.time if args.time is not None else times[-1]
+    # The proxy's UpdatePipeline(t), not simple.UpdatePipeline(): that one drops t = 0.0.
+    fields.UpdatePipeline(t)
+    info = fields.GetDataInformation()
+    if info.GetNumberOfCells() == 0:
+        print("render.py: %s has no cells at t = %g" % (fields.FileName, t), file=sys.stderr)
+        return 1
+    b = info.GetBounds()
+    lo, hi = [b[0], b[2], b[4]], [b[1], b[3], b[5]]
+    length = [hi[d] - lo[d] for d in range(3)]
+    up, sign = vertical_axis(os.path.join(out, "report.json"), length)
+    others = [d for d in range(3) if d != up]
+    horiz = max(others, key=lambda d: length[d])
+    normal = [d for d in others if d != horiz][0]
+    centre = [0.5 * (lo[d] + hi[d]) for d in range(3)]
+    # The plane through the centres of the middle layer of cells (not on a cell face).
+    ext = info.GetExtent()
+    ncell = ext[2 * normal + 1] - ext[2 * normal]
+    if ncell > 0:
+        h = length[normal] / ncell
+        centre[normal] = lo[normal] + (ncell // 2 + 0.5) * h
+
+    parts = None
+    ppath = os.path.join(out, "particles.xmf")
+    if os.path.exists(ppath):
+        parts = OpenDataFile(ppath)
+        parts.UpdatePipeline(t)
+        n = parts.GetDataInformation()
+        if n.GetNumberOfPoints() > 0 and n.GetNumberOfCells() != n.GetNumberOfPoints():
+            print("render.py: %s: %d particles but %d cells (the default reader shows nothing)"
+                  % (ppath, n.GetNumberOfPoints(), n.GetNumberOfCells()), file=sys.stderr)
+            return 1
+
+    sl = Slice(Input=fields)
+    sl.SliceType = "Plane"
+    sl.SliceType.Origin = centre
+    sl.SliceType.Normal = [1.0 if d == normal else 0.0 for d in range(3)]
+
+    def view():
+        v = CreateView("RenderView")
+        v.ViewSize = args.size
+        v.ViewTime = t
+        v.OrientationAxesVisibility = 1
+        v.Background = [1, 1, 1]
+        try:
+            v.UseColorPaletteForBackground = 0
+        except AttributeError:
+            pass
+        return v
+
+    def camera(v):
+        pos = list(centre)
+        pos[normal] += 4 * max(length) * (1 if normal != 1 else -1)
+        v.CameraPosition = pos
+        v.CameraFocalPoint = centre
+        v.CameraViewUp = [float(sign) if d == up else 0.0 for d in range(3)]
+        ResetCamera(v)
+
+    def title(v, text):
+        tx = Text(Text=text)
+        d = Show(tx, v)
+        d.FontSize = 14
+        d.Color = [0, 0, 0]
+        d.WindowLocation = "Upper Center"
+
+    def flat(d):  # true colours on the plane (no shading)
+        d.Ambient = 1.0
+        d.Diffuse = 0.0
+
+    def bar(v, array, label, where="Lower Right Corner"):
+        lut = GetColorTransferFunction(array)
+        sb = GetScalarBar(lut, v)
+        sb.WindowLocation = where
+        sb.Title = label
+        sb.ComponentTitle = ""
+        sb.TitleColor = [0, 0, 0]
+        sb.LabelColor = [0, 0, 0]
+        sb.Visibility = 1
+        lut.ApplyPreset({"eps": "Viridis (matplotlib)", "u": "Inferno (matplotlib)"}.get(
+            array, "Cool to Warm"), True)
+        return lut
+
+    written = []
+    stamp = "%s, t = %.6g s" % (case, t)
+    # (ParaView's text drops '|', so the speeds are spelled out.)
+    for name, array, comp, label in (("eps", "eps", None, "fluid fraction eps (1)"),
+                                     ("speed", "u", "Magnitude", "fluid speed (m/s)")):
+        v = view()
+        d = Show(sl, v)
+        flat(d)
+        ColorBy(d, ("CELLS", array, comp) if comp else ("CELLS", array))
+        d.RescaleTransferFunctionToDataRange(True, False)
+        bar(v, array, label)
+        title(v, "%s on the mid-plane %s = %.4g m (%s)" % (label, "xyz"[normal], centre[normal],
+                                                          stamp))
+        camera(v)
+        Render(v)
+        f = os.path.join(png_dir, "render_%s.png" % name)
+        SaveScreenshot(f, v, ImageResolution=args.size)
+        written.append(f)
+        Delete(v)
+
+    if parts is not None:
+        v = view()
+        d = Show(sl, v)
+        flat(d)
+        ColorBy(d, ("CELLS", "eps"))
+        d.Opacity = 0.5
+        bar(v, "eps", "fluid fraction eps (1)", "Upper Right Corner")
+        pd = Show(parts, v)
+        pd.SetRepresentationType("Point Gaussian")
+        pd.ScaleByArray = 1
+        pd.SetScaleArray = ["POINTS", "radius"]
+        pd.UseScaleFunction = 0
+        pd.GaussianRadius = 1.0
+        pd.ShaderPreset = "Sphere"
+        ColorBy(pd, ("POINTS", "v", "Magnitude"))
+        pd.RescaleTransferFunctionToDataRange(True, False)
+        bar(v, "v", "particle speed (m/s)")
+        title(v, "particles coloured by speed, in front of the eps plane (%s, %d particles)"
+              % (stamp, parts.GetDataInformation().GetNumberOfPoints()))
+        camera(v)
+        Render(v)
+        f = os.path.join(png_dir, "render_particles.png")
+        SaveScreenshot(f, v, ImageResolution=args.size)
+        written.append(f)
+        Delete(v)
+    for f in written:
+        print("render.py: wrote %s" % f)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,148 @@
+#!/usr/bin/python3
+"""A picture of a run without ParaView: DIR/snapshot.png from the last output of DIR.
+
+    /usr/bin/python3 bench/scripts/snapshot.py OUT_DIR [--step N] [--png FILE] [--report FILE]
+
+Left: the fluid fraction eps on the mid-plane that contains the vertical (gravity) axis; right:
+the fluid speed |u| (m/s) on the same plane. The particles whose centres lie within one cell of
+the plane are drawn on both, to scale (their true radius), coloured by their speed on the right.
+Reads the files of docs/output.md with h5py (fields_NNNNNN.h5, particles_NNNNNN.h5) and the
+case's gravity from report.json when it is there (else: the longest axis is vertical). The coloc
+driver runs this at the end of a run that writes fields (key output.snapshot). Exit status 0
+when the PNG is written, 1 with a message otherwise.
+"""
+import argparse
+import glob
+import json
+import os
+import re
+import sys
+
+
+def last_step(out_dir, series):
+    steps = []
+    for f in glob.glob(os.path.join(out_dir, series + "_*.h5")):
+        m = re.search(r"_(\d+)\.h5$", f)
+        if m:
+            steps.append(int(m.group(1)))
+    return max(steps) if steps else None
+
+
+def vertical_axis(report, length):
+    """(axis, +1 if up is +axis) from the case's gravity in report.json, else the longest axis."""
+    try:
+        with open(report) as f:
+            g = json.load(f)["config"]["gravity"]
+        a = max(range(3), key=lambda d: abs(g[d]))
+        if g[a] != 0:
+            return a, (1 if g[a] < 0 else -1)
+    except (OSError, KeyError, ValueError, TypeError, IndexError):
+        pass
+    return max(range(3), key=lambda d: length[d]), 1
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out_dir")
+    ap.add_argument("--step", type=int, help="output step (default: the last one)")
+    ap.add_argument("--png", help="output file (default: OUT_DIR/snapshot.png)")
+    ap.add_argument("--report", help="the run's report.json (default: OUT_DIR/report.json)")
+    args = ap.parse_args()
+    try:
+        import h5py
+        import numpy as np
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.collections import EllipseCollection
+    except ImportError as e:
+        print("snapshot.py: needs h5py, numpy and matplotlib (/usr/bin/python3 on Debian): %s" % e,
+              file=sys.stderr)
+        return 1
+
+    step = args.step if args.step is not None else last_step(args.out_dir, "fields")
+    if step is None:
+        print("snapshot.py: no fields_*.h5 in '%s'" % args.out_dir, file=sys.stderr)
+        return 1
+    fpath = os.path.join(args.out_dir, "fields_%06d.h5" % step)
+    with h5py.File(fpath, "r") as f:
+        origin = np.array(f.attrs["origin"], dtype=float)
+        spacing = np.array(f.attrs["spacing"], dtype=float)
+        cells = np.array(f.attrs["cells"], dtype=float).astype(int)
+        time = float(f.attrs["time"])
+        eps = f["eps"][...] if "eps" in f else None      # [nz][ny][nx]
+        u = f["u"][...] if "u" in f else None            # [nz][ny][nx][3]
+    length = spacing * cells
+    up, sign = vertical_axis(args.report or os.path.join(args.out_dir, "report.json"), length)
+    # The in-plane horizontal axis: the longer of the other two; the plane is normal to the third.
+    others = [d for d in range(3) if d != up]
+    horiz = max(others, key=lambda d: length[d])
+    normal = [d for d in others if d != horiz][0]
+    mid = cells[normal] // 2
+
+    def plane(a):  # a indexed [z][y][x]; returns [vertical][horizontal]
+        a = np.take(a, mid, axis=2 - normal)
+        rem = [d for d in (2, 1, 0) if d != normal]  # remaining array axes as grid axes
+        return a if rem[0] == up else a.T
+
+    panels = []
+    if eps is not None:
+        panels.append(("fluid fraction eps (1)", plane(eps), "viridis"))
+    if u is not None:
+        panels.append(("fluid speed |u| (m/s)", plane(np.linalg.norm(u, axis=-1)), "magma"))
+    if not panels:
+        print("snapshot.py: '%s' has neither eps nor u" % fpath, file=sys.stderr)
+        return 1
+
+    ppath = os.path.join(args.out_dir, "particles_%06d.h5" % step)
+    px = None
+    if os.path.exists(ppath):
+        with h5py.File(ppath, "r") as f:
+            x, v, r = f["x"][...], f["v"][...], f["radius"][...]
+        near = np.abs(x[:, normal] - (origin[normal] + (mid + 0.5) * spacing[normal])) \
+            <= spacing[normal]
+        px, pv, pr = x[near], np.linalg.norm(v[near], axis=1), r[near]
+        ntotal = len(x)
+
+    ext = [origin[horiz], origin[horiz] + length[horiz], origin[up], origin[up] + length[up]]
+    aspect = length[up] / length[horiz]
+    w = 4.0 if aspect > 1.5 else 6.0
+    fig, axes = plt.subplots(1, len(panels), figsize=(w * len(panels), min(9.0, w * aspect) + 2.2),
+                             squeeze=False, layout="constrained")
+    names = "xyz"
+    for ax, (title, img, cmap) in zip(axes[0], panels):
+        im = ax.imshow(img, origin="lower" if sign > 0 else "upper", extent=ext, cmap=cmap,
+                       interpolation="nearest", aspect="equal")
+        fig.colorbar(im, ax=ax, orientation="horizontal", shrink=0.9, pad=0.02, label=title)
+        if px is not None and len(px):
+            speed_panel = title.startswith("fluid speed")
+            ec = EllipseCollection(2 * pr, 2 * pr, np.zeros_like(pr), units="xy",
+                                   offsets=np.column_stack([px[:, horiz], px[:, up]]),
+                                   offset_transform=ax.transData,
+                                   facecolors="none" if not speed_panel else None,
+                                   edgecolors="white" if not speed_panel else "black",
+                                   linewidths=0.3)
+            if speed_panel:
+                ec.set_array(pv)
+                ec.set_cmap("cool")
+                fig.colorbar(ec, ax=ax, orientation="horizontal", shrink=0.9, pad=0.02,
+                             label="particle speed |v| (m/s)")
+            ax.add_collection(ec)
+        ax.set_xlabel("%s (m)" % names[horiz])
+        ax.tick_params(axis="x", labelrotation=30)
+        ax.set_ylabel("%s (m), %s" % (names[up], "up" if sign > 0 else "down"))
+        ax.set_title(title.split(" (")[0], fontsize=10)
+    case = os.path.basename(os.path.normpath(args.out_dir))
+    sub = "plane %s = %.4g m (cell %d)" % (names[normal],
+                                            origin[normal] + (mid + 0.5) * spacing[normal], mid)
+    if px is not None:
+        sub += "; %d of %d particles within one cell of it, drawn to scale" % (len(px), ntotal)
+    fig.suptitle("%s: step %d, t = %.6g s\n%s" % (case, step, time, sub), fontsize=10)
+    png = args.png or os.path.join(args.out_dir, "snapshot.png")
+    fig.savefig(png, dpi=110)
+    print("snapshot.py: wrote %s" % png)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
