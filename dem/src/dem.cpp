@@ -300,6 +300,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   flow.due.assign(inflow.size(), 0);
   flow.inserted.assign(inflow.size(), 0);
   flow.dueMass.assign(inflow.size(), 0.0);
+  flow.waiting.assign(inflow.size(), {});
   for (const auto& f : inflow) rmax = std::max(rmax, f.size.rmax());
   // bins must exist for the particles to come (setupBins checks them only when any will)
   const long long binTotal = total + (inflow.empty() ? 0 : 1);
@@ -770,21 +771,21 @@ void DemSolver::Impl::removeOutflow() {
 }
 
 void DemSolver::Impl::insertInflow() {
-  // At the start of a step (owned and ghost positions current): the particles due by now, in
-  // id order per source, each on its own site of the patch (a pseudo-random site order per
-  // step, so sites never overlap each other), at an offset drawn from its id and the step. A
-  // candidate is checked by the rank owning its centre against the local particles (owned and
-  // ghosts: every particle within a diameter of it is one), then one allreduce takes the first
-  // overlapping candidate of each source: it and the later ones wait for the next step (in id
-  // order). Everything but the overlap test is computed alike on every rank.
+  // At the start of a step (owned and ghost positions current): the particles due by now join
+  // their source's waiting list (in id order); the first min(waiting, sites) of them are
+  // candidates, candidate j on site P(j) of the patch (P a pseudo-random permutation drawn per
+  // step, so candidates never overlap each other), at an offset drawn from its id and the step.
+  // A candidate is checked by the rank owning its centre against the local particles (owned and
+  // ghosts: every particle within a diameter of it is one); one allreduce of the verdicts, and
+  // the accepted candidates enter while the others wait for the next step (another site).
+  // Everything but the overlap test is computed alike on every rank.
   const double t = static_cast<double>(steps) * dt;
   const std::size_t nIn = inflow.size();
-  bool any = false;
-  ensure(iscr, 2 * nIn);
-  iscr.assign(2 * nIn, 0);  // per source: candidates this step, first rejected
+  std::size_t total = 0;
   for (std::size_t n = 0; n < nIn; ++n) {
     const auto& f = inflow[n];
     const double te = f.end > 0 ? std::min(t, f.end) : t;
+    const long long before = flow.due[n];
     if (te > f.start) {
       if (f.rate > 0) {
         flow.due[n] = std::max(flow.due[n],
@@ -798,18 +799,19 @@ void DemSolver::Impl::insertInflow() {
         }
       }
     }
-    const long long c = std::min(flow.due[n] - flow.inserted[n], f.na * f.nb);
-    iscr[2 * n] = static_cast<int>(c);
-    iscr[2 * n + 1] = static_cast<int>(c);
-    any = any || c > 0;
+    auto& w = flow.waiting[n];
+    for (long long k = before; k < flow.due[n]; ++k) w.push_back(k);
+    total += static_cast<std::size_t>(
+        std::min(static_cast<long long>(w.size()), f.na * f.nb));
   }
-  if (!any) return;
+  if (total == 0) return;
   const auto candidate = [&](std::size_t n, long long j, detail::NewParticle& q) {
     const auto& f = inflow[n];
-    const detail::RandomPermutation perm(static_cast<std::uint64_t>(f.na * f.nb),
-                                         detail::hash3(seed, 0x1f10 + n, static_cast<std::uint64_t>(steps)));
+    const detail::RandomPermutation perm(
+        static_cast<std::uint64_t>(f.na * f.nb),
+        detail::hash3(seed, 0x1f10 + n, static_cast<std::uint64_t>(steps)));
     const auto site = static_cast<long long>(perm(static_cast<std::uint64_t>(j)));
-    q.id = inflowIdBase + (flow.inserted[n] + j) * static_cast<long long>(nIn) +
+    q.id = inflowIdBase + flow.waiting[n][static_cast<std::size_t>(j)] * static_cast<long long>(nIn) +
            static_cast<long long>(n);
     const auto uid = static_cast<std::uint64_t>(q.id);
     q.material = f.material;
@@ -817,14 +819,16 @@ void DemSolver::Impl::insertInflow() {
     const long long ij[2] = {site % f.na, site / f.na};
     const int ab[2] = {f.a, f.b};
     const double free = std::max(0.0, 0.5 * f.s - q.radius);
+    const auto stream = 1000 + 4 * static_cast<std::uint64_t>(steps);
     for (int k = 0; k < 2; ++k)
       q.x[ab[k]] = f.pmin[k] + (static_cast<double>(ij[k]) + 0.5) * f.s +
-                   free * (2.0 * detail::uniform01(seed, uid, 1000 + 4 * static_cast<std::uint64_t>(steps) + static_cast<std::uint64_t>(k)) - 1.0);
+                   free * (2.0 * detail::uniform01(seed, uid, stream + static_cast<std::uint64_t>(k)) - 1.0);
     q.x[f.axis] = f.side == 0 ? origin[f.axis] + 0.5 * f.s : origin[f.axis] + L[f.axis] - 0.5 * f.s;
     for (int d = 0; d < 3; ++d) {
       q.v[d] = f.v[static_cast<std::size_t>(d)];
       if (f.spread > 0)
-        q.v[d] += f.spread * (2.0 * detail::uniform01(seed, uid, 10 + static_cast<std::uint64_t>(d)) - 1.0);
+        q.v[d] += f.spread *
+                  (2.0 * detail::uniform01(seed, uid, 10 + static_cast<std::uint64_t>(d)) - 1.0);
     }
   };
   const auto overlaps = [&](const detail::NewParticle& q) {
@@ -846,36 +850,42 @@ void DemSolver::Impl::insertInflow() {
         }
     return false;
   };
+  // verdicts: 1 = rejected by the owner of the candidate's centre (max over the ranks)
+  ensure(inScr, total);
+  inScr.assign(total, 0);
   detail::NewParticle q;
-  for (std::size_t n = 0; n < nIn; ++n)
-    for (long long j = 0; j < iscr[2 * n]; ++j) {
+  for (std::size_t n = 0, c = 0; n < nIn; ++n) {
+    const long long m =
+        std::min(static_cast<long long>(flow.waiting[n].size()), inflow[n].na * inflow[n].nb);
+    for (long long j = 0; j < m; ++j, ++c) {
       candidate(n, j, q);
-      if (owns(q.x) && overlaps(q)) {
-        iscr[2 * n + 1] = static_cast<int>(j);
-        break;
-      }
+      if (owns(q.x) && overlaps(q)) inScr[c] = 1;
     }
-  {
-    std::vector<int>& first = inScr;
-    ensure(first, nIn);
-    first.resize(nIn);
-    for (std::size_t n = 0; n < nIn; ++n) first[n] = -iscr[2 * n + 1];
-    comm.maxInPlace(std::span<int>(first.data(), nIn));
-    for (std::size_t n = 0; n < nIn; ++n) iscr[2 * n + 1] = -first[n];
   }
-  for (std::size_t n = 0; n < nIn; ++n) {
-    const long long acc = iscr[2 * n + 1];
-    for (long long j = 0; j < acc; ++j) {
+  comm.maxInPlace(std::span<int>(inScr.data(), total));
+  for (std::size_t n = 0, c = 0; n < nIn; ++n) {
+    auto& w = flow.waiting[n];
+    const long long m = std::min(static_cast<long long>(w.size()), inflow[n].na * inflow[n].nb);
+    std::size_t keep = 0;
+    for (long long j = 0; j < m; ++j, ++c) {
+      const auto ju = static_cast<std::size_t>(j);
+      if (inScr[c] != 0) {
+        w[keep++] = w[ju];
+        continue;
+      }
       candidate(n, j, q);
       flow.massIn += massOf(q.material, q.radius);
+      ++flow.inserted[n];
+      ++flow.countIn;
+      forceRebuild = true;
       if (owns(q.x)) {
         ensure(incoming, incoming.size() + 1);
         incoming.push_back(q);
       }
     }
-    flow.inserted[n] += acc;
-    flow.countIn += acc;
-    if (acc > 0) forceRebuild = true;
+    // the rejected candidates keep their order, ahead of the ones that were not candidates
+    for (std::size_t j = static_cast<std::size_t>(m); j < w.size(); ++j) w[keep++] = w[j];
+    w.resize(keep);
   }
 }
 
@@ -889,6 +899,9 @@ std::vector<double> DemFlow::pack() const {
     v.push_back(static_cast<double>(due[n]));
     v.push_back(static_cast<double>(inserted[n]));
     v.push_back(dueMass[n]);
+    const auto& w = n < waiting.size() ? waiting[n] : std::vector<long long>{};
+    v.push_back(static_cast<double>(w.size()));
+    for (long long k : w) v.push_back(static_cast<double>(k));
   }
   return v;
 }
@@ -904,10 +917,16 @@ DemFlow DemFlow::unpack(const std::vector<double>& v) {
   f.massOut = v[5];
   for (std::size_t k = 0; k < 6; ++k) f.countOutByFace[k] = static_cast<long long>(v[6 + k]);
   const auto m = static_cast<std::size_t>(v[12]);
-  for (std::size_t n = 0; n < m && 15 + 3 * n < v.size() + 0; ++n) {
-    f.due.push_back(static_cast<long long>(v[13 + 3 * n]));
-    f.inserted.push_back(static_cast<long long>(v[14 + 3 * n]));
-    f.dueMass.push_back(v[15 + 3 * n]);
+  std::size_t q = 13;
+  for (std::size_t n = 0; n < m && q + 4 <= v.size(); ++n) {
+    f.due.push_back(static_cast<long long>(v[q]));
+    f.inserted.push_back(static_cast<long long>(v[q + 1]));
+    f.dueMass.push_back(v[q + 2]);
+    const auto nw = static_cast<std::size_t>(v[q + 3]);
+    q += 4;
+    std::vector<long long> w;
+    for (std::size_t k = 0; k < nw && q < v.size(); ++k, ++q) w.push_back(static_cast<long long>(v[q]));
+    f.waiting.push_back(std::move(w));
   }
   return f;
 }
@@ -1724,18 +1743,22 @@ void DemSolver::Impl::restore(DemState& st) {
   steps = st.steps;
   rebuilds = st.rebuilds;
   {
-    // the tallies are global (the same in every rank's state, or absent): the largest wins; the
-    // out tallies continue on rank 0 only (they are summed over the ranks)
+    // the tallies are global (the same in every rank's state, or absent there): taken from
+    // the lowest rank with the longest record; the out tallies continue on rank 0 only (they
+    // are summed over the ranks)
     std::vector<double> v = st.flow.pack();
+    const auto sizes = comm.allgather(static_cast<long long>(v.size()));
+    int from = 0;
+    for (int r = 1; r < P; ++r)
+      if (sizes[static_cast<std::size_t>(r)] > sizes[static_cast<std::size_t>(from)]) from = r;
+    v.resize(static_cast<std::size_t>(sizes[static_cast<std::size_t>(from)]));
+    comm.broadcast(std::span<double>(v), from);
     const std::size_t nIn = inflow.size();
-    v.resize(13 + 3 * nIn, 0.0);
-    v[12] = static_cast<double>(nIn);
-    comm.maxInPlace(std::span<double>(v));
-    const DemFlow f = DemFlow::unpack(v);
-    flow = f;
+    flow = DemFlow::unpack(v);
     flow.due.resize(nIn, 0);
     flow.inserted.resize(nIn, 0);
     flow.dueMass.resize(nIn, 0.0);
+    flow.waiting.resize(nIn);
     if (!comm.isRoot()) {
       flow.countOut = 0;
       flow.massOut = 0;
@@ -2075,7 +2098,7 @@ Json DemSolver::diagnostics() const {
     if (m.face[k / 2][k % 2] == Impl::Face::Outflow) byFace[names[k]] = f.countOutByFace[k];
   j["count_out_by_face"] = byFace;
   long long waiting = 0;
-  for (std::size_t n = 0; n < f.due.size(); ++n) waiting += f.due[n] - f.inserted[n];
+  for (const auto& w : f.waiting) waiting += static_cast<long long>(w.size());
   j["inflow_waiting"] = waiting;
   const double scale = f.massInitial + f.massIn;
   j["mass_balance"] = scale > 0 ? std::abs(scale - f.massOut - held) / scale : 0.0;

@@ -47,6 +47,7 @@ struct DemFlow {
   std::array<long long, 6> countOutByFace{};  // xlo, xhi, ylo, yhi, zlo, zhi
   std::vector<long long> due, inserted;       // per inflow source: particles due, inserted
   std::vector<double> dueMass;                // per inflow source: mass of the particles due
+  std::vector<std::vector<long long>> waiting;  // per inflow source: due, not yet inserted
   /// As numbers (checkpoint files) and back.
   std::vector<double> pack() const;
   static DemFlow unpack(const std::vector<double>& v);
