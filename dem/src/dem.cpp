@@ -310,7 +310,9 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     double rs = 0;
     for (const double r : initial->particles.radius) rs = std::max(rs, r);
     rmax = std::max(rmax, comm.max(rs));
-    if (total == 0) total = comm.sum(static_cast<long long>(initial->particles.nOwned));
+    // (with inflow the bins stay those of the case: the run that wrote the state had them)
+    if (total == 0 && inflow.empty())
+      total = comm.sum(static_cast<long long>(initial->particles.nOwned));
   }
   if (total > 0 && nMat == 0)
     throw ConfigError("particles.materials", "at least one material is required");
