@@ -29,14 +29,14 @@
 // cell edges (a bin is k cells or 1/k cell), so block edges are bin edges.
 #include "coloc/dem/dem.hpp"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <span>
 #include <sstream>
-
-#include <sys/mman.h>
 
 #include "contact.hpp"
 #include "generate.hpp"
@@ -372,8 +372,9 @@ void DemSolver::Impl::setupFaces(const Config& cfg) {
         f = grid.periodic[d] ? Face::Periodic : (wallsOn ? Face::Wall : Face::Open);
       } else if (v == "periodic") {
         if (!grid.periodic[d])
-          throw ConfigError(key, std::string("periodic needs a periodic fluid axis (domain.periodic.") +
-                                     kAxis[d] + " = true)");
+          throw ConfigError(key,
+                            std::string("periodic needs a periodic fluid axis (domain.periodic.") +
+                                kAxis[d] + " = true)");
         f = Face::Periodic;
       } else {
         if (grid.periodic[d])
@@ -395,9 +396,9 @@ void DemSolver::Impl::setupFaces(const Config& cfg) {
       const auto& g = inflow[m];
       if (g.axis == f.axis && g.side == f.side && f.pmin[0] < g.pmax[0] && g.pmin[0] < f.pmax[0] &&
           f.pmin[1] < g.pmax[1] && g.pmin[1] < f.pmax[1])
-        throw ConfigError("particles.inflow[" + std::to_string(n) + "].patch",
-                          "overlaps the patch of particles.inflow[" + std::to_string(m) +
-                              "] on the same face");
+        throw ConfigError(
+            "particles.inflow[" + std::to_string(n) + "].patch",
+            "overlaps the patch of particles.inflow[" + std::to_string(m) + "] on the same face");
     }
   }
 }
@@ -790,8 +791,8 @@ void DemSolver::Impl::insertInflow() {
     const long long before = flow.due[n];
     if (te > f.start) {
       if (f.rate > 0) {
-        flow.due[n] = std::max(flow.due[n],
-                               static_cast<long long>(std::floor(f.rate * (te - f.start))));
+        flow.due[n] =
+            std::max(flow.due[n], static_cast<long long>(std::floor(f.rate * (te - f.start))));
       } else {
         while (flow.dueMass[n] < f.massRate * (te - f.start)) {
           const auto id = static_cast<std::uint64_t>(
@@ -803,8 +804,7 @@ void DemSolver::Impl::insertInflow() {
     }
     auto& w = flow.waiting[n];
     for (long long k = before; k < flow.due[n]; ++k) w.push_back(k);
-    total += static_cast<std::size_t>(
-        std::min(static_cast<long long>(w.size()), f.na * f.nb));
+    total += static_cast<std::size_t>(std::min(static_cast<long long>(w.size()), f.na * f.nb));
   }
   if (total == 0) return;
   const auto candidate = [&](std::size_t n, long long j, detail::NewParticle& q) {
@@ -813,7 +813,8 @@ void DemSolver::Impl::insertInflow() {
         static_cast<std::uint64_t>(f.na * f.nb),
         detail::hash3(seed, 0x1f10 + n, static_cast<std::uint64_t>(steps)));
     const auto site = static_cast<long long>(perm(static_cast<std::uint64_t>(j)));
-    q.id = inflowIdBase + flow.waiting[n][static_cast<std::size_t>(j)] * static_cast<long long>(nIn) +
+    q.id = inflowIdBase +
+           flow.waiting[n][static_cast<std::size_t>(j)] * static_cast<long long>(nIn) +
            static_cast<long long>(n);
     const auto uid = static_cast<std::uint64_t>(q.id);
     q.material = f.material;
@@ -823,8 +824,9 @@ void DemSolver::Impl::insertInflow() {
     const double free = std::max(0.0, 0.5 * f.s - q.radius);
     const auto stream = 1000 + 4 * static_cast<std::uint64_t>(steps);
     for (int k = 0; k < 2; ++k)
-      q.x[ab[k]] = f.pmin[k] + (static_cast<double>(ij[k]) + 0.5) * f.s +
-                   free * (2.0 * detail::uniform01(seed, uid, stream + static_cast<std::uint64_t>(k)) - 1.0);
+      q.x[ab[k]] =
+          f.pmin[k] + (static_cast<double>(ij[k]) + 0.5) * f.s +
+          free * (2.0 * detail::uniform01(seed, uid, stream + static_cast<std::uint64_t>(k)) - 1.0);
     q.x[f.axis] = f.side == 0 ? origin[f.axis] + 0.5 * f.s : origin[f.axis] + L[f.axis] - 0.5 * f.s;
     for (int d = 0; d < 3; ++d) {
       q.v[d] = f.v[static_cast<std::size_t>(d)];
@@ -837,7 +839,8 @@ void DemSolver::Impl::insertInflow() {
     int b[3];
     for (int d = 0; d < 3; ++d)
       b[d] = static_cast<int>(std::clamp(gbinRaw(q.x[d], d) - binLo[d], 0LL,
-                                         static_cast<long long>(nb[d] - 1))) + 1;
+                                         static_cast<long long>(nb[d] - 1))) +
+             1;
     for (int z = b[2] - 1; z <= b[2] + 1; ++z)
       for (int y = b[1] - 1; y <= b[1] + 1; ++y)
         for (int x = b[0] - 1; x <= b[0] + 1; ++x) {
@@ -927,7 +930,8 @@ DemFlow DemFlow::unpack(const std::vector<double>& v) {
     const auto nw = static_cast<std::size_t>(v[q + 3]);
     q += 4;
     std::vector<long long> w;
-    for (std::size_t k = 0; k < nw && q < v.size(); ++k, ++q) w.push_back(static_cast<long long>(v[q]));
+    for (std::size_t k = 0; k < nw && q < v.size(); ++k, ++q)
+      w.push_back(static_cast<long long>(v[q]));
     f.waiting.push_back(std::move(w));
   }
   return f;

@@ -95,39 +95,45 @@ double normalQuantile(double f) {
 
 double SizeDist::rmin() const {
   switch (kind) {
-    case Fixed: return r0;
+    case Fixed:
+      return r0;
     case Discrete: {
       double m = d[0];
       for (std::size_t i = 0; i < d.size(); ++i)
         if (cum[i] > (i ? cum[i - 1] : 0.0)) m = std::min(m, d[i]);
       return 0.5 * m;
     }
-    default: return 0.5 * dmin;
+    default:
+      return 0.5 * dmin;
   }
 }
 
 double SizeDist::rmax() const {
   switch (kind) {
-    case Fixed: return r0;
+    case Fixed:
+      return r0;
     case Discrete: {
       double m = 0;
       for (std::size_t i = 0; i < d.size(); ++i)
         if (cum[i] > (i ? cum[i - 1] : 0.0)) m = std::max(m, d[i]);
       return 0.5 * m;
     }
-    default: return 0.5 * dmax;
+    default:
+      return 0.5 * dmax;
   }
 }
 
 double SizeDist::radius(double u) const {
   switch (kind) {
-    case Fixed: return r0;
+    case Fixed:
+      return r0;
     case Discrete: {
       std::size_t i = 0;
       while (i + 1 < d.size() && !(u < cum[i])) ++i;
       return 0.5 * d[i];
     }
-    case Uniform: return 0.5 * (dmin + (dmax - dmin) * u);
+    case Uniform:
+      return 0.5 * (dmin + (dmax - dmin) * u);
     case LogNormal: {
       const double dd = std::exp(mu + sigma * normalQuantile(fa + (fb - fa) * u));
       return 0.5 * std::clamp(dd, dmin, dmax);
@@ -205,8 +211,9 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
     f.rate = src["rate"].get<double>();
     f.massRate = src["mass_rate"].get<double>();
     if ((f.rate > 0) == (f.massRate > 0))
-      throw ConfigError(key + ".rate", "give exactly one of rate (particles/s) and mass_rate "
-                                       "(kg/s), positive");
+      throw ConfigError(key + ".rate",
+                        "give exactly one of rate (particles/s) and mass_rate "
+                        "(kg/s), positive");
     f.start = src["start"].get<double>();
     f.end = src["end"].get<double>();
     if (f.end > 0 && !(f.end > f.start)) throw ConfigError(key + ".end", "must be after start");

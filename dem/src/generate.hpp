@@ -33,11 +33,11 @@ struct NewParticle {
 /// normal) truncated to [min, max] by inverting its CDF.
 struct SizeDist {
   enum Kind { Fixed, Discrete, Uniform, LogNormal } kind = Fixed;
-  double r0 = 0;                  // Fixed: the radius
-  std::vector<double> d, cum;     // Discrete: diameters, cumulative weights (last = 1)
-  double dmin = 0, dmax = 0;      // Uniform, LogNormal: bounds
-  double mu = 0, sigma = 1;       // LogNormal: of ln d
-  double fa = 0, fb = 1;          // LogNormal: the normal CDF at the cut-offs
+  double r0 = 0;               // Fixed: the radius
+  std::vector<double> d, cum;  // Discrete: diameters, cumulative weights (last = 1)
+  double dmin = 0, dmax = 0;   // Uniform, LogNormal: bounds
+  double mu = 0, sigma = 1;    // LogNormal: of ln d
+  double fa = 0, fb = 1;       // LogNormal: the normal CDF at the cut-offs
   double rmin() const;
   double rmax() const;
   /// Radius for a uniform number u in [0, 1).
@@ -57,8 +57,8 @@ struct SourceInfo {
 
 /// A particle inflow source (particles.inflow[n]), parsed and checked once.
 struct InflowInfo {
-  int axis = 0, side = 0;  // face: axis, 0 = low, 1 = high
-  int a = 1, b = 2;        // the two in-plane axes, in axis order
+  int axis = 0, side = 0;                     // face: axis, 0 = low, 1 = high
+  int a = 1, b = 2;                           // the two in-plane axes, in axis order
   double pmin[2] = {0, 0}, pmax[2] = {0, 0};  // the patch, in (a, b)
   double s = 0;                               // site edge 2 r_max (1 + gap)
   long long na = 1, nb = 1;                   // sites along a, b

@@ -88,11 +88,12 @@ TEST(ErgunPolydisperse, BedPressureGradientWithSauterDiameter) {
   const double ergunMax = 150.0 * kMu * (1 - eps) * (1 - eps) * u / (e3 * dmax * dmax) +
                           1.75 * kRho * (1 - eps) * u * u / (e3 * dmax);
   if (dec.comm().isRoot())
-    std::printf("bidisperse Ergun bed U = %g m/s: %g particles, d32 %.5g mm, eps %.4f, -dP/dx %.6g "
-                "Pa/m, Ergun(d32) %.6g (ratio %.4f), per-particle sum %.6g (ratio %.4f), "
-                "Ergun(d_max) %.6g\n",
-                u, mom[3], d32 * 1e3, eps, measured, ergun, measured / ergun, sum, measured / sum,
-                ergunMax);
+    std::printf(
+        "bidisperse Ergun bed U = %g m/s: %g particles, d32 %.5g mm, eps %.4f, -dP/dx %.6g "
+        "Pa/m, Ergun(d32) %.6g (ratio %.4f), per-particle sum %.6g (ratio %.4f), "
+        "Ergun(d_max) %.6g\n",
+        u, mom[3], d32 * 1e3, eps, measured, ergun, measured / ergun, sum, measured / sum,
+        ergunMax);
   EXPECT_NEAR(eps, 0.40, 0.01);
   EXPECT_NEAR(measured / ergun, 1.0, 0.05);
   EXPECT_GT(std::abs(measured / ergunMax - 1.0), 0.10);  // the test can tell the diameters apart

@@ -2,9 +2,9 @@
 // outflow): the sphere is dragged downstream and leaves through the outlet face. The run on this
 // communicator (1, 2 or 4 ranks) is compared step by step with a serial run: position, velocity
 // and coupling force equal to 1e-10 relative while the particle is in the box, removed at the
-// same step, the deposited solid volume the particle's volume before and 0 from the step after, the count and
-// mass reports (1 out through xhi, mass out = the particle's mass, mass held 0, balance 0), and
-// the final pressure field equal to 1e-10 relative (after the particle left).
+// same step, the deposited solid volume the particle's volume before and 0 from the step after, the
+// count and mass reports (1 out through xhi, mass out = the particle's mass, mass held 0, balance
+// 0), and the final pressure field equal to 1e-10 relative (after the particle left).
 #include <cmath>
 #include <numbers>
 
@@ -36,10 +36,9 @@ TEST(Case1Outflow, ParticleLeavesSameStepOnEveryRankCount) {
   const Comm self(selfRaw);
   // started at x = 0.65 m (a third of a metre from the outlet: it crosses the block faces at
   // 0.75 m on 4 ranks) so that the test stays short
-  const std::vector<std::string> over = {"run.end_time=0.6", "run.progress_interval_s=0",
-                                         "fluid.pressure.tol=1e-13",
-                                         "particles.sources.0.positions=[0.65,0.1,0.1]",
-                                         "particles.boundary.xhi=outflow"};
+  const std::vector<std::string> over = {
+      "run.end_time=0.6", "run.progress_interval_s=0", "fluid.pressure.tol=1e-13",
+      "particles.sources.0.positions=[0.65,0.1,0.1]", "particles.boundary.xhi=outflow"};
   const std::string path = COLOC_SOURCE_DIR "/bench/cases/case1.json";
   {
     const Config cfg = Config::load(world, path, over, coupling::caseSchema());
@@ -75,8 +74,8 @@ TEST(Case1Outflow, ParticleLeavesSameStepOnEveryRankCount) {
     EXPECT_LT(leftPar, par.steps() - 10);
     EXPECT_GT(lastX, 1.0 - 0.05);  // last seen within a cell of the outlet face
     if (world.isRoot())
-      std::printf("case1 outflow: left at fluid step %lld (t = %.4f s), last x = %.6f m\n",
-                  leftPar, leftPar * 0.005, lastX);
+      std::printf("case1 outflow: left at fluid step %lld (t = %.4f s), last x = %.6f m\n", leftPar,
+                  leftPar * 0.005, lastX);
     const Json dp = par.particles()->diagnostics(), ds = ser.particles()->diagnostics();
     for (const Json* d : {&dp, &ds}) {
       EXPECT_EQ((*d)["count"].get<long long>(), 0);

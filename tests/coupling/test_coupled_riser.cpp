@@ -14,11 +14,14 @@ using namespace coloc;
 TEST(Riser, ReachesSteadyCount) {
   const Comm world = Comm::world();
   // softer beads (E = 1.6e5 Pa) allow a DEM step of 5e-5 s: 20 sub-steps per fluid step
-  const std::vector<std::string> over = {"domain.length=[0.02,0.02,0.08]", "domain.cells=[4,4,16]",
-                                         "run.end_time=0.6", "run.progress_interval_s=0",
-                                         "particles.materials.0.young=1.6e5", "particles.dt=5e-5"};
-  const Config cfg = Config::load(world, COLOC_SOURCE_DIR "/bench/cases/riser.json", over,
-                                  coupling::caseSchema());
+  const std::vector<std::string> over = {"domain.length=[0.02,0.02,0.08]",
+                                         "domain.cells=[4,4,16]",
+                                         "run.end_time=0.6",
+                                         "run.progress_interval_s=0",
+                                         "particles.materials.0.young=1.6e5",
+                                         "particles.dt=5e-5"};
+  const Config cfg =
+      Config::load(world, COLOC_SOURCE_DIR "/bench/cases/riser.json", over, coupling::caseSchema());
   coupling::Simulation sim(world, cfg);
   std::vector<long long> counts;
   while (!sim.finished()) {
@@ -29,12 +32,13 @@ TEST(Riser, ReachesSteadyCount) {
   if (world.isRoot()) {
     std::printf("riser (80 mm), ranks %d: count every 0.05 s:", world.size());
     for (auto c : counts) std::printf(" %lld", c);
-    std::printf("\n  in %lld, out %lld (zhi %lld), waiting %lld, mass in %.4e out %.4e held "
-                "%.4e, balance %.1e\n",
-                d["count_in"].get<long long>(), d["count_out"].get<long long>(),
-                d["count_out_by_face"]["zhi"].get<long long>(), d["inflow_waiting"].get<long long>(),
-                d["mass_in"].get<double>(), d["mass_out"].get<double>(),
-                d["mass_held"].get<double>(), d["mass_balance"].get<double>());
+    std::printf(
+        "\n  in %lld, out %lld (zhi %lld), waiting %lld, mass in %.4e out %.4e held "
+        "%.4e, balance %.1e\n",
+        d["count_in"].get<long long>(), d["count_out"].get<long long>(),
+        d["count_out_by_face"]["zhi"].get<long long>(), d["inflow_waiting"].get<long long>(),
+        d["mass_in"].get<double>(), d["mass_out"].get<double>(), d["mass_held"].get<double>(),
+        d["mass_balance"].get<double>());
   }
   ASSERT_EQ(counts.size(), 12u);
   const double mean = (counts[8] + counts[9] + counts[10] + counts[11]) / 4.0;

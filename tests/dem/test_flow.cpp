@@ -70,10 +70,11 @@ TEST(DemFlow, OutflowFloorMatchesSerial) {
   }
   const auto dp = par.dem->diagnostics(), ds = ser.dem->diagnostics();
   if (par.dec.comm().isRoot())
-    std::printf("outflow floor, ranks %d: %lld of %ld left through zlo, max |x, v - serial| %.3e, "
-                "most contacts/particle %.3f, balance %.2e\n",
-                par.dec.size(), dp["count_out"].get<long long>(), n, worst,
-                contacts, dp["mass_balance"].get<double>());
+    std::printf(
+        "outflow floor, ranks %d: %lld of %ld left through zlo, max |x, v - serial| %.3e, "
+        "most contacts/particle %.3f, balance %.2e\n",
+        par.dec.size(), dp["count_out"].get<long long>(), n, worst, contacts,
+        dp["mass_balance"].get<double>());
   EXPECT_EQ(worstMismatch, 0);  // the same particles removed at the same steps
   EXPECT_LE(worst, 1e-10 * 0.06);
   EXPECT_EQ(dp["count_out"], ds["count_out"]);
@@ -251,13 +252,17 @@ TEST(DemFlow, SizeDistributions) {
   EXPECT_LE(d1.back(), 0.002);
   // median of the truncated distribution: F(m) = (F(a) + F(b)) / 2 with F the normal CDF of
   // ln(d / 1 mm) / 0.4
-  const auto F = [](double d) { return 0.5 * std::erfc(-std::log(d / 0.001) / 0.4 / std::sqrt(2.0)); };
+  const auto F = [](double d) {
+    return 0.5 * std::erfc(-std::log(d / 0.001) / 0.4 / std::sqrt(2.0));
+  };
   const double target = 0.5 * (F(0.0007) + F(0.002));
   double lo = 0.0007, hi = 0.002;
   for (int k = 0; k < 100; ++k) (F(0.5 * (lo + hi)) < target ? lo : hi) = 0.5 * (lo + hi);
   const double median = 0.5 * (d1[1999] + d1[2000]);
-  std::printf("log-normal: sample median %.5g mm, truncated median %.5g mm; discrete 1/1.5/2 mm: "
-              "%ld %ld %ld\n", median * 1e3, lo * 1e3, small, mid, large);
+  std::printf(
+      "log-normal: sample median %.5g mm, truncated median %.5g mm; discrete 1/1.5/2 mm: "
+      "%ld %ld %ld\n",
+      median * 1e3, lo * 1e3, small, mid, large);
   EXPECT_NEAR(median, lo, 0.03 * lo);  // 4000 samples: ~1 % standard error
   // discrete weights 3 : 0 : 1 over 196 particles: 147 expected small, sd ~6
   EXPECT_EQ(small + mid + large, 196);

@@ -44,9 +44,9 @@ struct ContactHistory {
 struct DemFlow {
   long long countInitial = 0, countIn = 0, countOut = 0;
   double massInitial = 0, massIn = 0, massOut = 0;
-  std::array<long long, 6> countOutByFace{};  // xlo, xhi, ylo, yhi, zlo, zhi
-  std::vector<long long> due, inserted;       // per inflow source: particles due, inserted
-  std::vector<double> dueMass;                // per inflow source: mass of the particles due
+  std::array<long long, 6> countOutByFace{};    // xlo, xhi, ylo, yhi, zlo, zhi
+  std::vector<long long> due, inserted;         // per inflow source: particles due, inserted
+  std::vector<double> dueMass;                  // per inflow source: mass of the particles due
   std::vector<std::vector<long long>> waiting;  // per inflow source: due, not yet inserted
   /// As numbers (checkpoint files) and back.
   std::vector<double> pack() const;
