@@ -271,6 +271,10 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
   file.setAttribute(group, "time", s.time);
   file.setAttribute(group, "steps", s.steps);
   file.setAttribute(group, "rebuilds", s.rebuilds);
+  {
+    const std::vector<double> flow = s.flow.pack();  // particle inflow/outflow tallies
+    file.setAttribute(group, "flow", std::span<const double>(flow));
+  }
   const std::string cg = group + "/contacts";
   file.createGroup(cg);
   const std::size_t m = s.contacts.size();
@@ -313,6 +317,7 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
   s.time = file.attributeDouble(group, "time");
   s.steps = file.attributeInt(group, "steps");
   s.rebuilds = file.attributeInt(group, "rebuilds");
+  s.flow = dem::DemFlow::unpack(file.attributeDoubles(group, "flow"));
   const std::string cg = group + "/contacts";
   const RowRange rc = evenRows(comm, file.attributeInt(cg, "count"));
   const auto holder = readParticleArray<std::int64_t>(file, cg + "/holder", rc);

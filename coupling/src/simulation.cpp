@@ -750,6 +750,7 @@ Json Simulation::report(double wallSeconds) const {
     }
   }
   if (dem_) out["particles"] = dem_->diagnostics();
+  if (dem_) out["checks"]["particle_mass_balance"] = out["particles"]["mass_balance"];
   const auto dimsJson = [](const Decomposition& d) {
     return Json::array({d.dims()[0], d.dims()[1], d.dims()[2]});
   };

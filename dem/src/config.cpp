@@ -16,6 +16,33 @@ Schema commonSource() {
            Range::nonNegative());
   return s;
 }
+
+/// The size distribution of a source (diameters, by number); "fixed" uses the source's radius.
+void sizeKey(Schema& s) {
+  std::map<std::string, Schema> t;
+  t["fixed"] = Schema();
+  Schema disc;
+  disc.numberList("diameters", std::nullopt, "the diameters (m)", Range::positive());
+  disc.numberList("weights", std::vector<double>{},
+                  "relative number of particles of each diameter (default: equal)",
+                  Range::nonNegative());
+  t["discrete"] = disc;
+  Schema uni;
+  uni.number("min", std::nullopt, "smallest diameter (m)", Range::positive());
+  uni.number("max", std::nullopt, "largest diameter (m)", Range::positive());
+  t["uniform"] = uni;
+  Schema ln;
+  ln.number("median", std::nullopt, "median diameter exp(mu) of the untruncated distribution (m)",
+            Range::positive());
+  ln.number("sigma", std::nullopt, "standard deviation of ln(d)", Range::positive());
+  ln.number("min", std::nullopt, "lower cut-off diameter (m)", Range::positive());
+  ln.number("max", std::nullopt, "upper cut-off diameter (m)", Range::positive());
+  t["lognormal"] = ln;
+  s.variant("size", t, "fixed",
+            "diameter distribution by number, drawn per particle from its id: fixed (the radius "
+            "key), discrete{diameters, weights}, uniform{min, max} (uniform in d), "
+            "lognormal{median, sigma, min, max} (ln d normal, truncated to [min, max])");
+}
 }  // namespace
 
 void declareConfig(Schema& s) {
@@ -53,7 +80,18 @@ void declareConfig(Schema& s) {
            "materials: [{density, young, poisson, restitution, friction, rolling_friction}]");
   }
   s.integer("particles.wall_material", 0, "material of the box walls", Range::nonNegative());
-  s.boolean("particles.walls", true, "planar walls on every non-periodic face of the box");
+  s.boolean("particles.walls", true,
+            "planar walls on every non-periodic face of the box whose particles.boundary is auto");
+  {
+    const char* faces[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
+    for (const char* f : faces)
+      s.string(std::string("particles.boundary.") + f, "auto",
+               std::string("particle condition at the ") + f +
+                   " face: auto (periodic on a periodic axis, else a wall when particles.walls), "
+                   "wall, outflow (a particle whose centre leaves is removed, counted, its mass "
+                   "reported), periodic (only on a periodic axis)",
+               {"auto", "wall", "outflow", "periodic"});
+  }
   s.integer("particles.bin_cells", 0,
             "bin edge = this many CFD cells (0: automatic, the smallest bin that coincides with "
             "the cells and holds the interaction range)",
@@ -82,7 +120,8 @@ void declareConfig(Schema& s) {
     lat.vec3("lo", std::nullopt, "centre of the first particle (m)");
     lat.intVec3("counts", std::nullopt, "particles along x, y, z", Range::atLeast(1));
     lat.vec3("spacing", std::nullopt, "centre distance along x, y, z (m)", Range::positive());
-    lat.number("radius", std::nullopt, "radius (m)", Range::positive());
+    lat.number("radius", 0.0, "radius (m); required unless size is given", Range::nonNegative());
+    sizeKey(lat);
     lat.number("jitter", 0.0,
                "random displacement per axis as a fraction of the free gap (spacing/2 - radius)",
                Range::between(0.0, 1.0));
@@ -92,8 +131,10 @@ void declareConfig(Schema& s) {
     rnd.vec3("lo", std::nullopt, "region lower corner (m)");
     rnd.vec3("hi", std::nullopt, "region upper corner (m)");
     rnd.integer("count", std::nullopt, "number of particles", Range::nonNegative());
-    rnd.number("radius", std::nullopt, "radius, or smallest radius with radius_max (m)",
-               Range::positive());
+    rnd.number("radius", 0.0,
+               "radius, or smallest radius with radius_max (m); required unless size is given",
+               Range::nonNegative());
+    sizeKey(rnd);
     rnd.number("radius_max", 0.0, "largest radius for a uniform radius distribution (0: mono)",
                Range::nonNegative());
     rnd.number("gap", 0.05,
@@ -106,7 +147,8 @@ void declareConfig(Schema& s) {
     lay.vec3("lo", std::nullopt, "region lower corner (m)");
     lay.vec3("hi", std::nullopt, "region upper corner (m)");
     lay.integer("count", std::nullopt, "number of particles", Range::nonNegative());
-    lay.number("radius", std::nullopt, "radius (m)", Range::positive());
+    lay.number("radius", 0.0, "radius (m); required unless size is given", Range::nonNegative());
+    sizeKey(lay);
     lay.string("axis", "z", "layers are stacked along this axis, from lo upwards", {"x", "y", "z"});
     lay.number("gap", 0.05, "site edge = 2 r (1 + gap)", Range::nonNegative());
     lay.number("jitter", 0.5, "random displacement per axis as a fraction of the free gap",
@@ -115,6 +157,35 @@ void declareConfig(Schema& s) {
     s.list("particles.sources", src,
            "particle sources: {type: list|lattice|random|layered, ...}; global ids follow the "
            "order of the sources");
+  }
+  {
+    Schema in = commonSource();
+    in.string("face", std::nullopt, "the face the particles enter through",
+              {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"});
+    in.numberList("patch.min", std::vector<double>{},
+                  "lower corner of the inlet rectangle in the face's two other coordinates, in "
+                  "axis order (xlo/xhi: y, z; ylo/yhi: x, z; zlo/zhi: x, y) (m); default: the "
+                  "whole face",
+                  Range::any());
+    in.numberList("patch.max", std::vector<double>{}, "upper corner of the rectangle (m)",
+                  Range::any());
+    in.number("rate", 0.0, "particles per second (exclusive with mass_rate)", Range::nonNegative());
+    in.number("mass_rate", 0.0,
+              "kilograms per second: a particle is due when the mass of the particles due so far "
+              "is below mass_rate (t - start) (exclusive with rate)",
+              Range::nonNegative());
+    in.number("start", 0.0, "time the inflow starts (s)", Range::nonNegative());
+    in.number("end", 0.0, "time the inflow stops (s; 0: never)", Range::nonNegative());
+    in.number("radius", 0.0, "radius (m); required unless size is given", Range::nonNegative());
+    in.number("gap", 0.05,
+              "insertion sites are squares of edge 2 r_max (1 + gap) in the layer of that "
+              "thickness along the face; a due particle enters on its own site at a random "
+              "offset, or waits (in id order) while a particle already there would overlap it",
+              Range::nonNegative());
+    sizeKey(in);
+    s.list("particles.inflow", {{"", in}},
+           "particle inflow sources: [{face, patch{min, max}, rate|mass_rate, velocity, radius|"
+           "size, start, end, ...}]; ids follow those of particles.sources");
   }
 }
 

@@ -29,6 +29,8 @@
 // cell edges (a bin is k cells or 1/k cell), so block edges are bin edges.
 #include "coloc/dem/dem.hpp"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -36,10 +38,9 @@
 #include <span>
 #include <sstream>
 
-#include <sys/mman.h>
-
 #include "contact.hpp"
 #include "generate.hpp"
+#include "rng.hpp"
 
 namespace coloc::dem {
 
@@ -138,6 +139,19 @@ struct DemSolver::Impl {
   std::vector<PairCoeff> pairC;  // [a * nMat + b]
   std::vector<PairCoeff> wallC;  // [a]
   std::array<std::array<bool, 2>, 3> wallOn{};
+  // particles.boundary: the condition of each box face, for every rank (not only the boundary
+  // blocks); Open = no wall (particles.walls false): a particle leaving is an error
+  enum class Face { Wall, Outflow, Periodic, Open };
+  std::array<std::array<Face, 2>, 3> face{};
+  bool anyOutflow = false;
+  // inflow (particles.inflow) and the flow tallies; every member of `flow` except the out ones
+  // is global and identical on every rank (the out ones count this rank's removals)
+  std::vector<detail::InflowInfo> inflow;
+  DemFlow flow;
+  std::int64_t inflowIdBase = 0;
+  std::uint64_t seed = 0;
+  std::vector<detail::NewParticle> incoming;  // accepted at the step's start, added at its rebuild
+  bool forceRebuild = false;
   double skin = 0, rc = 0, overlapLimit = 0.2, dtFraction = 0.2;
 
   // bins
@@ -192,7 +206,7 @@ struct DemSolver::Impl {
   std::array<std::vector<double>, 2> sbuf, rbuf;
 
   // scratch (grow-only)
-  std::vector<int> perm, iscr;
+  std::vector<int> perm, iscr, inScr;
 
   // diagnostics
   long long rebuilds = 0, steps = 0, contacts = 0, wallContacts = 0;
@@ -203,6 +217,13 @@ struct DemSolver::Impl {
   void readMaterials(const Config& cfg);
   void setupBins(const Config& cfg, double dmax, long long total);
   void checkTimeStep();
+  void setupFaces(const Config& cfg);
+  bool beyondOutflow(std::size_t i, int* which) const;
+  void removeOutflow();
+  void insertInflow();
+  double massOf(int material, double r) const {
+    return mats[static_cast<std::size_t>(material)].density * 4.0 / 3.0 * M_PI * r * r * r;
+  }
   void addParticle(const detail::NewParticle& q);
   long long gbinRaw(double x, int d) const {
     const double s = std::floor((x - origin[d]) / bs[d]);
@@ -245,6 +266,7 @@ struct DemSolver::Impl {
   int ownerRank(const double* x) const;
   void restore(DemState& st);
   DemState save();
+  DemFlow globalFlow() const;  // collective: the out tallies summed over the ranks
   std::string where() const;
 };
 
@@ -266,33 +288,46 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   for (const auto& m : mats) rolling = rolling || m.rollingFriction > 0;
 
   const auto info = detail::inspectSources(cfg, grid, nMat);
+  inflow = detail::inspectInflow(cfg, grid, nMat);
+  seed = static_cast<std::uint64_t>(cfg.integer("particles.seed"));
   double rmax = 0;
   long long total = 0;
   for (const auto& s : info) {
     if (s.count > 0) rmax = std::max(rmax, s.rmax);
     total += s.count;
   }
+  inflowIdBase = total;
+  flow.due.assign(inflow.size(), 0);
+  flow.inserted.assign(inflow.size(), 0);
+  flow.dueMass.assign(inflow.size(), 0.0);
+  flow.waiting.assign(inflow.size(), {});
+  for (const auto& f : inflow) rmax = std::max(rmax, f.size.rmax());
+  // bins must exist for the particles to come (setupBins checks them only when any will)
+  const long long binTotal = total + (inflow.empty() ? 0 : 1);
   if (initial) {
     // a restart: the bins are those of the case (same sources: same bins as the run that wrote
     // the state), widened only if the state holds larger particles than the sources
     double rs = 0;
     for (const double r : initial->particles.radius) rs = std::max(rs, r);
     rmax = std::max(rmax, comm.max(rs));
-    if (total == 0) total = comm.sum(static_cast<long long>(initial->particles.nOwned));
+    // (with inflow the bins stay those of the case: the run that wrote the state had them)
+    if (total == 0 && inflow.empty())
+      total = comm.sum(static_cast<long long>(initial->particles.nOwned));
   }
   if (total > 0 && nMat == 0)
     throw ConfigError("particles.materials", "at least one material is required");
   const double dmax = 2 * rmax;
   skin = cfg.number("particles.skin") * dmax;
   rc = dmax + skin;
-  const bool wallsOn = cfg.boolean("particles.walls");
+  setupFaces(cfg);
   for (int k = 0; k < 3; ++k)
-    wallOn[k] = {wallsOn && !grid.periodic[k] && dec.atLowBoundary(k),
-                 wallsOn && !grid.periodic[k] && dec.atHighBoundary(k)};
-  setupBins(cfg, dmax, total);
+    wallOn[k] = {face[k][0] == Face::Wall && dec.atLowBoundary(k),
+                 face[k][1] == Face::Wall && dec.atHighBoundary(k)};
+  setupBins(cfg, dmax, std::max(total, binTotal));
 
   if (initial) {
     restore(*initial);
+    checkTimeStep();
     return;
   }
   // Two passes over the sources: count this rank's particles, size every array once (exactly),
@@ -308,12 +343,64 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
                      [this](const detail::NewParticle& q) { addParticle(q); });
   }
   checkTimeStep();
+  {
+    double m = 0;
+    for (std::size_t i = 0; i < p.nOwned; ++i) m += p.mass[i];
+    double buf[2] = {static_cast<double>(p.nOwned), m};
+    comm.sumInPlace(std::span<double>(buf, 2));
+    flow.countInitial = static_cast<long long>(buf[0]);
+    flow.massInitial = buf[1];
+  }
   rebuild(true);
   {
     ScopedPhase f(timers, Phase::DemForce);
     computeForces(false);
   }
   checkOverlap(comm.max(maxOverlap));
+}
+
+void DemSolver::Impl::setupFaces(const Config& cfg) {
+  const auto& grid = dec.grid();
+  const bool wallsOn = cfg.boolean("particles.walls");
+  const char* names[3][2] = {{"xlo", "xhi"}, {"ylo", "yhi"}, {"zlo", "zhi"}};
+  for (int d = 0; d < 3; ++d)
+    for (int s = 0; s < 2; ++s) {
+      const std::string key = std::string("particles.boundary.") + names[d][s];
+      const std::string v = cfg.string(key);
+      Face f;
+      if (v == "auto") {
+        f = grid.periodic[d] ? Face::Periodic : (wallsOn ? Face::Wall : Face::Open);
+      } else if (v == "periodic") {
+        if (!grid.periodic[d])
+          throw ConfigError(key,
+                            std::string("periodic needs a periodic fluid axis (domain.periodic.") +
+                                kAxis[d] + " = true)");
+        f = Face::Periodic;
+      } else {
+        if (grid.periodic[d])
+          throw ConfigError(key, "'" + v + "' on a periodic axis (domain.periodic." + kAxis[d] +
+                                     " = true): use periodic or auto");
+        f = v == "wall" ? Face::Wall : Face::Outflow;
+      }
+      face[d][s] = f;
+      anyOutflow = anyOutflow || f == Face::Outflow;
+    }
+  for (std::size_t n = 0; n < inflow.size(); ++n) {
+    const auto& f = inflow[n];
+    if (face[f.axis][f.side] == Face::Outflow)
+      throw ConfigError("particles.inflow[" + std::to_string(n) + "].face",
+                        std::string("the face ") + names[f.axis][f.side] +
+                            " is an outflow face (particles.boundary): the particles would "
+                            "leave as they enter");
+    for (std::size_t m = 0; m < n; ++m) {
+      const auto& g = inflow[m];
+      if (g.axis == f.axis && g.side == f.side && f.pmin[0] < g.pmax[0] && g.pmin[0] < f.pmax[0] &&
+          f.pmin[1] < g.pmax[1] && g.pmin[1] < f.pmax[1])
+        throw ConfigError(
+            "particles.inflow[" + std::to_string(n) + "].patch",
+            "overlaps the patch of particles.inflow[" + std::to_string(m) + "] on the same face");
+    }
+  }
 }
 
 void DemSolver::Impl::readMaterials(const Config& cfg) {
@@ -426,17 +513,23 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
 void DemSolver::Impl::checkTimeStep() {
   // Rayleigh time (Hertz): pi r sqrt(rho/G) / (0.1631 nu + 0.8766), G = E/(2(1+nu))
   // (Li, Xu & Thornton 2005); linear: collision time pi sqrt(m*/k_n) with m* = m_min/2.
+  // The particles to come (inflow) count with the smallest radius of their distribution.
   double tLim = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < p.nOwned; ++i) {
-    const auto& m = mats[static_cast<std::size_t>(p.material[i])];
+  const auto limit = [&](int mat, double r, double mass) {
+    const auto& m = mats[static_cast<std::size_t>(mat)];
     double t;
     if (model == Model::HertzMindlin) {
       const double G = m.young / (2 * (1 + m.poisson));
-      t = M_PI * p.radius[i] * std::sqrt(m.density / G) / (0.1631 * m.poisson + 0.8766);
+      t = M_PI * r * std::sqrt(m.density / G) / (0.1631 * m.poisson + 0.8766);
     } else {
-      t = M_PI * std::sqrt(0.5 * p.mass[i] / pairC[0].kn);
+      t = M_PI * std::sqrt(0.5 * mass / pairC[0].kn);
     }
     tLim = std::min(tLim, t);
+  };
+  for (std::size_t i = 0; i < p.nOwned; ++i) limit(p.material[i], p.radius[i], p.mass[i]);
+  for (const auto& f : inflow) {
+    const double r = f.size.rmin();
+    limit(f.material, r, massOf(f.material, r));
   }
   tLim = comm.min(tLim);
   if (!std::isfinite(tLim)) return;
@@ -457,8 +550,7 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
   p.id[i] = q.id;
   p.material[i] = q.material;
   p.radius[i] = q.radius;
-  p.mass[i] = mats[static_cast<std::size_t>(q.material)].density * 4.0 / 3.0 * M_PI * q.radius *
-              q.radius * q.radius;
+  p.mass[i] = massOf(q.material, q.radius);
   for (int d = 0; d < 3; ++d) {
     p.x[d][i] = q.x[d];
     p.v[d][i] = q.v[d];
@@ -506,6 +598,10 @@ void DemSolver::Impl::substep() {
     ++steps;
     time = static_cast<double>(steps) * dt;  // no accumulated round-off
     return;
+  }
+  if (!inflow.empty()) {
+    ScopedPhase t(timers, Phase::DemNeighbor);
+    insertInflow();
   }
   {
     ScopedPhase t(timers, Phase::DemIntegrate);
@@ -596,10 +692,249 @@ bool DemSolver::Impl::decideRebuild() {
     if (!(d2 <= std::numeric_limits<double>::max())) d2 = std::numeric_limits<double>::max();
     m2 = std::max(m2, d2);
   }
+  // a centre beyond an outflow face, or particles entering, rebuild now (removal, insertion)
+  if (forceRebuild) m2 = std::numeric_limits<double>::max();
+  forceRebuild = false;
+  if (anyOutflow)
+    for (std::size_t i = 0; i < n; ++i)
+      if (beyondOutflow(i, nullptr)) {
+        m2 = std::numeric_limits<double>::max();
+        break;
+      }
   double buf[2] = {m2, maxOverlap};
   comm.maxInPlace(std::span<double>(buf, 2));
   checkOverlap(buf[1]);
   return buf[0] > 0.25 * skin * skin;
+}
+
+// ---------------------------------------------------------------------------------------------
+// outflow and inflow
+
+bool DemSolver::Impl::beyondOutflow(std::size_t i, int* which) const {
+  for (int d = 0; d < 3; ++d) {
+    const double x = p.x[d][i];
+    if (face[d][0] == Face::Outflow && x < origin[d]) {
+      if (which) *which = 2 * d;
+      return true;
+    }
+    if (face[d][1] == Face::Outflow && x > origin[d] + L[d]) {
+      if (which) *which = 2 * d + 1;
+      return true;
+    }
+  }
+  return false;
+}
+
+void DemSolver::Impl::removeOutflow() {
+  // After packHistory (rows per owned particle): particles whose centre is beyond an outflow
+  // face leave with their rows; rows of other particles keyed by their ids are taken by no list
+  // entry at the next build and become free slots (the histories are dropped).
+  const std::size_t n = p.nOwned;
+  std::size_t w = 0;
+  int hw = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int h0 = hStart[i], h1 = hStart[i + 1];
+    int fc = 0;
+    if (beyondOutflow(i, &fc)) {
+      ++flow.countOut;
+      flow.massOut += p.mass[i];
+      ++flow.countOutByFace[static_cast<std::size_t>(fc)];
+      continue;
+    }
+    if (w != i) {
+      p.id[w] = p.id[i];
+      p.material[w] = p.material[i];
+      p.radius[w] = p.radius[i];
+      p.mass[w] = p.mass[i];
+      for (int k = 0; k < 3; ++k) {
+        p.x[k][w] = p.x[k][i];
+        p.v[k][w] = p.v[k][i];
+        p.omega[k][w] = p.omega[k][i];
+        p.f[k][w] = p.f[k][i];
+        p.torque[k][w] = p.torque[k][i];
+        p.fExt[k][w] = p.fExt[k][i];
+      }
+    }
+    hStart[w] = hw;
+    for (int e = h0; e < h1; ++e, ++hw) {
+      hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
+      for (int k = 0; k < 3; ++k)
+        hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
+            hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
+    }
+    ++w;
+  }
+  if (w == n) return;
+  p.nOwned = w;
+  p.nGhost = 0;
+  hStart.resize(w + 1);
+  hStart[w] = hw;
+  hId.resize(static_cast<std::size_t>(hw));
+  hS.resize(3 * static_cast<std::size_t>(hw));
+}
+
+void DemSolver::Impl::insertInflow() {
+  // At the start of a step (owned and ghost positions current): the particles due by now join
+  // their source's waiting list (in id order); the first min(waiting, sites) of them are
+  // candidates, candidate j on site P(j) of the patch (P a pseudo-random permutation drawn per
+  // step, so candidates never overlap each other), at an offset drawn from its id and the step.
+  // A candidate is checked by the rank owning its centre against the local particles (owned and
+  // ghosts: every particle within a diameter of it is one); one allreduce of the verdicts, and
+  // the accepted candidates enter while the others wait for the next step (another site).
+  // Everything but the overlap test is computed alike on every rank.
+  const double t = static_cast<double>(steps) * dt;
+  const std::size_t nIn = inflow.size();
+  std::size_t total = 0;
+  for (std::size_t n = 0; n < nIn; ++n) {
+    const auto& f = inflow[n];
+    const double te = f.end > 0 ? std::min(t, f.end) : t;
+    const long long before = flow.due[n];
+    if (te > f.start) {
+      if (f.rate > 0) {
+        flow.due[n] =
+            std::max(flow.due[n], static_cast<long long>(std::floor(f.rate * (te - f.start))));
+      } else {
+        while (flow.dueMass[n] < f.massRate * (te - f.start)) {
+          const auto id = static_cast<std::uint64_t>(
+              inflowIdBase + flow.due[n] * static_cast<long long>(nIn) + static_cast<long long>(n));
+          flow.dueMass[n] += massOf(f.material, f.size.radius(detail::uniform01(seed, id, 1)));
+          ++flow.due[n];
+        }
+      }
+    }
+    auto& w = flow.waiting[n];
+    for (long long k = before; k < flow.due[n]; ++k) w.push_back(k);
+    total += static_cast<std::size_t>(std::min(static_cast<long long>(w.size()), f.na * f.nb));
+  }
+  if (total == 0) return;
+  const auto candidate = [&](std::size_t n, long long j, detail::NewParticle& q) {
+    const auto& f = inflow[n];
+    const detail::RandomPermutation perm(
+        static_cast<std::uint64_t>(f.na * f.nb),
+        detail::hash3(seed, 0x1f10 + n, static_cast<std::uint64_t>(steps)));
+    const auto site = static_cast<long long>(perm(static_cast<std::uint64_t>(j)));
+    q.id = inflowIdBase +
+           flow.waiting[n][static_cast<std::size_t>(j)] * static_cast<long long>(nIn) +
+           static_cast<long long>(n);
+    const auto uid = static_cast<std::uint64_t>(q.id);
+    q.material = f.material;
+    q.radius = f.size.radius(detail::uniform01(seed, uid, 1));
+    const long long ij[2] = {site % f.na, site / f.na};
+    const int ab[2] = {f.a, f.b};
+    const double free = std::max(0.0, 0.5 * f.s - q.radius);
+    const auto stream = 1000 + 4 * static_cast<std::uint64_t>(steps);
+    for (int k = 0; k < 2; ++k)
+      q.x[ab[k]] =
+          f.pmin[k] + (static_cast<double>(ij[k]) + 0.5) * f.s +
+          free * (2.0 * detail::uniform01(seed, uid, stream + static_cast<std::uint64_t>(k)) - 1.0);
+    q.x[f.axis] = f.side == 0 ? origin[f.axis] + 0.5 * f.s : origin[f.axis] + L[f.axis] - 0.5 * f.s;
+    for (int d = 0; d < 3; ++d) {
+      q.v[d] = f.v[static_cast<std::size_t>(d)];
+      if (f.spread > 0)
+        q.v[d] += f.spread *
+                  (2.0 * detail::uniform01(seed, uid, 10 + static_cast<std::uint64_t>(d)) - 1.0);
+    }
+  };
+  const auto overlaps = [&](const detail::NewParticle& q) {
+    int b[3];
+    for (int d = 0; d < 3; ++d)
+      b[d] = static_cast<int>(std::clamp(gbinRaw(q.x[d], d) - binLo[d], 0LL,
+                                         static_cast<long long>(nb[d] - 1))) +
+             1;
+    for (int z = b[2] - 1; z <= b[2] + 1; ++z)
+      for (int y = b[1] - 1; y <= b[1] + 1; ++y)
+        for (int x = b[0] - 1; x <= b[0] + 1; ++x) {
+          const auto bin = static_cast<std::size_t>(x + nbx[0] * (y + nbx[1] * z));
+          for (int e = binStart[bin]; e < binStart[bin + 1]; ++e) {
+            const auto i = static_cast<std::size_t>(binItems[static_cast<std::size_t>(e)]);
+            double r2 = 0;
+            for (int d = 0; d < 3; ++d) r2 += (p.x[d][i] - q.x[d]) * (p.x[d][i] - q.x[d]);
+            const double rs = p.radius[i] + q.radius;
+            if (r2 < rs * rs) return true;
+          }
+        }
+    return false;
+  };
+  // verdicts: 1 = rejected by the owner of the candidate's centre (max over the ranks)
+  ensure(inScr, total);
+  inScr.assign(total, 0);
+  detail::NewParticle q;
+  for (std::size_t n = 0, c = 0; n < nIn; ++n) {
+    const long long m =
+        std::min(static_cast<long long>(flow.waiting[n].size()), inflow[n].na * inflow[n].nb);
+    for (long long j = 0; j < m; ++j, ++c) {
+      candidate(n, j, q);
+      if (owns(q.x) && overlaps(q)) inScr[c] = 1;
+    }
+  }
+  comm.maxInPlace(std::span<int>(inScr.data(), total));
+  for (std::size_t n = 0, c = 0; n < nIn; ++n) {
+    auto& w = flow.waiting[n];
+    const long long m = std::min(static_cast<long long>(w.size()), inflow[n].na * inflow[n].nb);
+    std::size_t keep = 0;
+    for (long long j = 0; j < m; ++j, ++c) {
+      const auto ju = static_cast<std::size_t>(j);
+      if (inScr[c] != 0) {
+        w[keep++] = w[ju];
+        continue;
+      }
+      candidate(n, j, q);
+      flow.massIn += massOf(q.material, q.radius);
+      ++flow.inserted[n];
+      ++flow.countIn;
+      forceRebuild = true;
+      if (owns(q.x)) {
+        ensure(incoming, incoming.size() + 1);
+        incoming.push_back(q);
+      }
+    }
+    // the rejected candidates keep their order, ahead of the ones that were not candidates
+    for (std::size_t j = static_cast<std::size_t>(m); j < w.size(); ++j) w[keep++] = w[j];
+    w.resize(keep);
+  }
+}
+
+std::vector<double> DemFlow::pack() const {
+  std::vector<double> v = {static_cast<double>(countInitial), massInitial,
+                           static_cast<double>(countIn),      massIn,
+                           static_cast<double>(countOut),     massOut};
+  for (long long c : countOutByFace) v.push_back(static_cast<double>(c));
+  v.push_back(static_cast<double>(due.size()));
+  for (std::size_t n = 0; n < due.size(); ++n) {
+    v.push_back(static_cast<double>(due[n]));
+    v.push_back(static_cast<double>(inserted[n]));
+    v.push_back(dueMass[n]);
+    const auto& w = n < waiting.size() ? waiting[n] : std::vector<long long>{};
+    v.push_back(static_cast<double>(w.size()));
+    for (long long k : w) v.push_back(static_cast<double>(k));
+  }
+  return v;
+}
+
+DemFlow DemFlow::unpack(const std::vector<double>& v) {
+  DemFlow f;
+  if (v.size() < 13) return f;
+  f.countInitial = static_cast<long long>(v[0]);
+  f.massInitial = v[1];
+  f.countIn = static_cast<long long>(v[2]);
+  f.massIn = v[3];
+  f.countOut = static_cast<long long>(v[4]);
+  f.massOut = v[5];
+  for (std::size_t k = 0; k < 6; ++k) f.countOutByFace[k] = static_cast<long long>(v[6 + k]);
+  const auto m = static_cast<std::size_t>(v[12]);
+  std::size_t q = 13;
+  for (std::size_t n = 0; n < m && q + 4 <= v.size(); ++n) {
+    f.due.push_back(static_cast<long long>(v[q]));
+    f.inserted.push_back(static_cast<long long>(v[q + 1]));
+    f.dueMass.push_back(v[q + 2]);
+    const auto nw = static_cast<std::size_t>(v[q + 3]);
+    q += 4;
+    std::vector<long long> w;
+    for (std::size_t k = 0; k < nw && q < v.size(); ++k, ++q)
+      w.push_back(static_cast<long long>(v[q]));
+    f.waiting.push_back(std::move(w));
+  }
+  return f;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -609,6 +944,12 @@ void DemSolver::Impl::rebuild(bool first) {
   {
     ScopedPhase t(timers, Phase::DemMigrate);
     if (!first) packHistory();
+    if (anyOutflow) removeOutflow();
+    if (!incoming.empty()) {
+      p.nGhost = 0;
+      for (const auto& q : incoming) addParticle(q);
+      incoming.clear();
+    }
     migrate();
   }
   {
@@ -1390,12 +1731,46 @@ constexpr int kStateRec = 22;  // id, material, radius, mass, x3, v3, omega3, f3
 constexpr int kHistRec = 5;    // holder, partner, shear3
 }  // namespace
 
+DemFlow DemSolver::Impl::globalFlow() const {
+  DemFlow f = flow;
+  double buf[8] = {static_cast<double>(f.countOut), f.massOut};
+  for (std::size_t k = 0; k < 6; ++k) buf[2 + k] = static_cast<double>(f.countOutByFace[k]);
+  comm.sumInPlace(std::span<double>(buf, 8));
+  f.countOut = static_cast<long long>(buf[0]);
+  f.massOut = buf[1];
+  for (std::size_t k = 0; k < 6; ++k) f.countOutByFace[k] = static_cast<long long>(buf[2 + k]);
+  return f;
+}
+
 void DemSolver::Impl::restore(DemState& st) {
   const int P = comm.size();
   const auto& q = st.particles;
   time = st.time;
   steps = st.steps;
   rebuilds = st.rebuilds;
+  {
+    // the tallies are global (the same in every rank's state, or absent there): taken from
+    // the lowest rank with the longest record; the out tallies continue on rank 0 only (they
+    // are summed over the ranks)
+    std::vector<double> v = st.flow.pack();
+    const auto sizes = comm.allgather(static_cast<long long>(v.size()));
+    int from = 0;
+    for (int r = 1; r < P; ++r)
+      if (sizes[static_cast<std::size_t>(r)] > sizes[static_cast<std::size_t>(from)]) from = r;
+    v.resize(static_cast<std::size_t>(sizes[static_cast<std::size_t>(from)]));
+    comm.broadcast(std::span<double>(v), from);
+    const std::size_t nIn = inflow.size();
+    flow = DemFlow::unpack(v);
+    flow.due.resize(nIn, 0);
+    flow.inserted.resize(nIn, 0);
+    flow.dueMass.resize(nIn, 0.0);
+    flow.waiting.resize(nIn);
+    if (!comm.isRoot()) {
+      flow.countOut = 0;
+      flow.massOut = 0;
+      flow.countOutByFace = {};
+    }
+  }
   // 1. particles to their owners (by position), a general all-to-all: any rank may hold any
   //    subset of the state
   std::vector<std::vector<double>> out(static_cast<std::size_t>(P));
@@ -1548,6 +1923,7 @@ DemState DemSolver::Impl::save() {
   st.time = time;
   st.steps = steps;
   st.rebuilds = rebuilds;
+  st.flow = globalFlow();
   const std::size_t n = p.nOwned;
   auto& q = st.particles;
   q.nOwned = n;
@@ -1710,6 +2086,28 @@ Json DemSolver::diagnostics() const {
   j["bin_size"] = {m.bs[0], m.bs[1], m.bs[2]};
   j["dt"] = m.dt;
   j["frozen"] = m.frozen;
+  // flow: mass in (initial + inflow) = mass out (outflow faces) + mass held
+  const DemFlow f = m.globalFlow();
+  double held = 0;
+  for (std::size_t i = 0; i < m.p.nOwned; ++i) held += m.p.mass[i];
+  held = m.comm.sum(held);
+  j["count_initial"] = f.countInitial;
+  j["count_in"] = f.countIn;
+  j["count_out"] = f.countOut;
+  j["mass_initial"] = f.massInitial;
+  j["mass_in"] = f.massIn;
+  j["mass_out"] = f.massOut;
+  j["mass_held"] = held;
+  const char* names[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
+  Json byFace = Json::object();
+  for (std::size_t k = 0; k < 6; ++k)
+    if (m.face[k / 2][k % 2] == Impl::Face::Outflow) byFace[names[k]] = f.countOutByFace[k];
+  j["count_out_by_face"] = byFace;
+  long long waiting = 0;
+  for (const auto& w : f.waiting) waiting += static_cast<long long>(w.size());
+  j["inflow_waiting"] = waiting;
+  const double scale = f.massInitial + f.massIn;
+  j["mass_balance"] = scale > 0 ? std::abs(scale - f.massOut - held) / scale : 0.0;
   return j;
 }
 

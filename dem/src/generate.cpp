@@ -74,7 +74,179 @@ void siteRange(double lo, double s, long long n, double bLo, double bHi, long lo
   b = std::min(n - 1, static_cast<long long>(std::floor((bHi - lo) / s)) + 1);
 }
 
+double normalCdf(double x) {
+  return 0.5 * std::erfc(-x / std::sqrt(2.0));
+}
+
+/// x with normalCdf(x) = f (bisection: deterministic, and only run per new particle).
+double normalQuantile(double f) {
+  double lo = -40, hi = 40;
+  for (int it = 0; it < 200 && hi - lo > 1e-15 * std::max(1.0, std::abs(lo)); ++it) {
+    const double m = 0.5 * (lo + hi);
+    if (normalCdf(m) < f)
+      lo = m;
+    else
+      hi = m;
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace
+
+double SizeDist::rmin() const {
+  switch (kind) {
+    case Fixed:
+      return r0;
+    case Discrete: {
+      double m = d[0];
+      for (std::size_t i = 0; i < d.size(); ++i)
+        if (cum[i] > (i ? cum[i - 1] : 0.0)) m = std::min(m, d[i]);
+      return 0.5 * m;
+    }
+    default:
+      return 0.5 * dmin;
+  }
+}
+
+double SizeDist::rmax() const {
+  switch (kind) {
+    case Fixed:
+      return r0;
+    case Discrete: {
+      double m = 0;
+      for (std::size_t i = 0; i < d.size(); ++i)
+        if (cum[i] > (i ? cum[i - 1] : 0.0)) m = std::max(m, d[i]);
+      return 0.5 * m;
+    }
+    default:
+      return 0.5 * dmax;
+  }
+}
+
+double SizeDist::radius(double u) const {
+  switch (kind) {
+    case Fixed:
+      return r0;
+    case Discrete: {
+      std::size_t i = 0;
+      while (i + 1 < d.size() && !(u < cum[i])) ++i;
+      return 0.5 * d[i];
+    }
+    case Uniform:
+      return 0.5 * (dmin + (dmax - dmin) * u);
+    case LogNormal: {
+      const double dd = std::exp(mu + sigma * normalQuantile(fa + (fb - fa) * u));
+      return 0.5 * std::clamp(dd, dmin, dmax);
+    }
+  }
+  return r0;
+}
+
+SizeDist sizeDistribution(const Json& src, const std::string& key) {
+  SizeDist sd;
+  const auto& sz = src["size"];
+  const std::string type = sz["type"].get<std::string>();
+  const std::string sk = key + ".size";
+  if (type == "fixed") {
+    sd.r0 = src["radius"].get<double>();
+    if (!(sd.r0 > 0)) throw ConfigError(key + ".radius", "must be positive (or give size)");
+    return sd;
+  }
+  if (src.contains("radius") && src["radius"].get<double>() > 0)
+    throw ConfigError(key + ".radius", "give radius or size, not both");
+  if (type == "discrete") {
+    sd.kind = SizeDist::Discrete;
+    for (const auto& v : sz["diameters"]) sd.d.push_back(v.get<double>());
+    if (sd.d.empty()) throw ConfigError(sk + ".diameters", "needs at least one diameter");
+    std::vector<double> w;
+    for (const auto& v : sz["weights"]) w.push_back(v.get<double>());
+    if (w.empty()) w.assign(sd.d.size(), 1.0);
+    if (w.size() != sd.d.size())
+      throw ConfigError(sk + ".weights", "needs one weight per diameter");
+    double tot = 0;
+    for (double x : w) tot += x;
+    if (!(tot > 0)) throw ConfigError(sk + ".weights", "needs a positive weight");
+    double c = 0;
+    for (double x : w) sd.cum.push_back((c += x) / tot);
+    sd.cum.back() = 1.0;
+  } else {
+    sd.dmin = sz["min"].get<double>();
+    sd.dmax = sz["max"].get<double>();
+    if (!(sd.dmax >= sd.dmin)) throw ConfigError(sk + ".max", "must be >= min");
+    if (type == "uniform") {
+      sd.kind = SizeDist::Uniform;
+    } else {
+      sd.kind = SizeDist::LogNormal;
+      sd.mu = std::log(sz["median"].get<double>());
+      sd.sigma = sz["sigma"].get<double>();
+      sd.fa = normalCdf((std::log(sd.dmin) - sd.mu) / sd.sigma);
+      sd.fb = normalCdf((std::log(sd.dmax) - sd.mu) / sd.sigma);
+      if (!(sd.fb - sd.fa > 1e-12))
+        throw ConfigError(sk, "the cut-offs [min, max] hold no probability of this distribution");
+    }
+  }
+  return sd;
+}
+
+std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid, int nMaterials) {
+  std::vector<InflowInfo> out;
+  if (!cfg.has("particles.inflow")) return out;
+  const auto& list = cfg.at("particles.inflow");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const auto& src = list[i];
+    const std::string key = "particles.inflow[" + std::to_string(i) + "]";
+    InflowInfo f;
+    const std::string face = src["face"].get<std::string>();
+    f.axis = face[0] - 'x';
+    f.side = face.substr(1) == "hi" ? 1 : 0;
+    f.a = f.axis == 0 ? 1 : 0;
+    f.b = f.axis == 2 ? 1 : 2;
+    if (grid.periodic[f.axis])
+      throw ConfigError(key + ".face", "face " + face + " lies on a periodic axis");
+    f.material = static_cast<int>(src["material"].get<long long>());
+    if (f.material >= nMaterials)
+      throw ConfigError(key + ".material", "no such material (" + std::to_string(nMaterials) +
+                                               " declared in particles.materials)");
+    f.size = sizeDistribution(src, key);
+    f.rate = src["rate"].get<double>();
+    f.massRate = src["mass_rate"].get<double>();
+    if ((f.rate > 0) == (f.massRate > 0))
+      throw ConfigError(key + ".rate",
+                        "give exactly one of rate (particles/s) and mass_rate "
+                        "(kg/s), positive");
+    f.start = src["start"].get<double>();
+    f.end = src["end"].get<double>();
+    if (f.end > 0 && !(f.end > f.start)) throw ConfigError(key + ".end", "must be after start");
+    f.v = vec(src["velocity"]);
+    f.spread = src["velocity_spread"].get<double>();
+    const int ab[2] = {f.a, f.b};
+    const auto& pmin = src["patch"]["min"];
+    const auto& pmax = src["patch"]["max"];
+    if (pmin.size() != pmax.size() || (pmin.size() != 0 && pmin.size() != 2))
+      throw ConfigError(key + ".patch", "min and max need two numbers each (or neither)");
+    for (int k = 0; k < 2; ++k) {
+      const int d = ab[k];
+      const double lo = grid.origin[d], hi = grid.origin[d] + grid.length[d];
+      f.pmin[k] = pmin.empty() ? lo : pmin[k].get<double>();
+      f.pmax[k] = pmax.empty() ? hi : pmax[k].get<double>();
+      if (!(f.pmin[k] >= lo - 1e-12 * grid.length[d] && f.pmax[k] <= hi + 1e-12 * grid.length[d] &&
+            f.pmax[k] > f.pmin[k]))
+        throw ConfigError(key + ".patch", std::string("the rectangle along ") +
+                                              static_cast<char>('x' + d) +
+                                              " must satisfy box low <= min < max <= box high");
+    }
+    f.s = 2 * f.size.rmax() * (1 + src["gap"].get<double>());
+    f.na = static_cast<long long>(std::floor((f.pmax[0] - f.pmin[0]) / f.s * (1 + 1e-12)));
+    f.nb = static_cast<long long>(std::floor((f.pmax[1] - f.pmin[1]) / f.s * (1 + 1e-12)));
+    if (f.na < 1 || f.nb < 1)
+      throw ConfigError(key + ".patch", "the patch is narrower than one insertion site (" +
+                                            std::to_string(f.s) + " m)");
+    if (f.s > grid.length[f.axis])
+      throw ConfigError(key + ".face", "the box is thinner than one insertion site");
+    out.push_back(f);
+  }
+  return out;
+}
 
 std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid, int nMaterials) {
   const auto& sources = cfg.at("particles.sources");
@@ -96,9 +268,13 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
       if (!radii.empty()) {
         if (static_cast<long long>(radii.size()) != info.count)
           throw ConfigError(key + ".radii", "needs one radius per position");
-        for (auto& r : radii) info.rmax = std::max(info.rmax, r.get<double>());
+        info.rmin = radii[0].get<double>();
+        for (auto& r : radii) {
+          info.rmax = std::max(info.rmax, r.get<double>());
+          info.rmin = std::min(info.rmin, r.get<double>());
+        }
       } else {
-        info.rmax = src["radius"].get<double>();
+        info.rmax = info.rmin = src["radius"].get<double>();
         if (!(info.rmax > 0) && info.count > 0)
           throw ConfigError(key + ".radius", "must be positive (or give radii)");
       }
@@ -120,15 +296,21 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
         info.count *= c;
         last[d] = lo[d] + static_cast<double>(c - 1) * sp[d];
       }
-      info.rmax = src["radius"].get<double>();
+      const auto sd = sizeDistribution(src, key);
+      info.rmax = sd.rmax();
+      info.rmin = sd.rmin();
       checkInside(grid, lo, key + ".lo");
       checkInside(grid, last, key + ".counts");
     } else if (type == "random" || type == "layered") {
       info.count = src["count"].get<long long>();
-      const double r = src["radius"].get<double>();
+      const auto sd = sizeDistribution(src, key);
+      const double r = sd.rmax();
       info.rmax = r;
+      info.rmin = sd.rmin();
       if (type == "random") {
         const double rm = src["radius_max"].get<double>();
+        if (rm > 0 && !sd.fixed())
+          throw ConfigError(key + ".radius_max", "give radius_max or size, not both");
         if (rm > 0 && rm < r) throw ConfigError(key + ".radius_max", "must be >= radius");
         info.rmax = std::max(r, rm);
       }
@@ -180,7 +362,7 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
     } else if (type == "lattice") {
       const auto lo = vec(src["lo"]);
       const auto sp = vec(src["spacing"]);
-      const double r = src["radius"].get<double>();
+      const auto sd = sizeDistribution(src, srcPath(i));
       const double jitter = src["jitter"].get<double>();
       std::array<long long, 3> n{}, a{}, b{};
       for (int d = 0; d < 3; ++d) {
@@ -194,7 +376,8 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
             NewParticle p;
             p.id = base + kx + n[0] * (ky + n[1] * kz);
             p.material = mat;
-            p.radius = r;
+            p.radius = sd.radius(uniform01(seed, static_cast<std::uint64_t>(p.id), 1));
+            const double r = p.radius;
             const long long k3[3] = {kx, ky, kz};
             for (int d = 0; d < 3; ++d) {
               const double free = std::max(0.0, 0.5 * sp[d] - r);
@@ -208,7 +391,8 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
           }
     } else if (type == "random" || type == "layered") {
       const bool random = type == "random";
-      const double r0 = src["radius"].get<double>();
+      const auto sd = sizeDistribution(src, srcPath(i));
+      const double r0 = sd.rmax();
       const double rmax = info[i].rmax;
       const auto sg = siteGrid(src, 2 * rmax * (1 + src["gap"].get<double>()), srcPath(i));
       const long long count = info[i].count;
@@ -238,7 +422,10 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
             p.id = base + k;
             p.material = mat;
             const auto uid = static_cast<std::uint64_t>(p.id);
-            p.radius = random && rmax > r0 ? r0 + (rmax - r0) * uniform01(seed, uid, 1) : r0;
+            if (!sd.fixed())
+              p.radius = sd.radius(uniform01(seed, uid, 1));
+            else
+              p.radius = random && rmax > r0 ? r0 + (rmax - r0) * uniform01(seed, uid, 1) : r0;
             for (int d = 0; d < 3; ++d) {
               const double free = std::max(0.0, 0.5 * sg.s - p.radius);
               p.x[d] = sg.lo[d] + (static_cast<double>(k3[d]) + 0.5) * sg.s +

@@ -10,6 +10,7 @@
 // of sites layer after layer from the low end of an axis (the paper's case 3 bed).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -27,10 +28,50 @@ struct NewParticle {
   double v[3] = {0, 0, 0};
 };
 
+/// A size distribution (by number, in diameter), drawn per particle from one uniform number of
+/// its id's stream: fixed, discrete (diameters with weights), uniform in d, log-normal (ln d
+/// normal) truncated to [min, max] by inverting its CDF.
+struct SizeDist {
+  enum Kind { Fixed, Discrete, Uniform, LogNormal } kind = Fixed;
+  double r0 = 0;               // Fixed: the radius
+  std::vector<double> d, cum;  // Discrete: diameters, cumulative weights (last = 1)
+  double dmin = 0, dmax = 0;   // Uniform, LogNormal: bounds
+  double mu = 0, sigma = 1;    // LogNormal: of ln d
+  double fa = 0, fb = 1;       // LogNormal: the normal CDF at the cut-offs
+  double rmin() const;
+  double rmax() const;
+  /// Radius for a uniform number u in [0, 1).
+  double radius(double u) const;
+  bool fixed() const { return kind == Fixed; }
+};
+
+/// Reads the "size" object of a source (radius: its "radius" key); throws ConfigError naming
+/// key + ".size" or key + ".radius".
+SizeDist sizeDistribution(const Json& src, const std::string& key);
+
 struct SourceInfo {
   long long count = 0;
   double rmax = 0;
+  double rmin = 0;
 };
+
+/// A particle inflow source (particles.inflow[n]), parsed and checked once.
+struct InflowInfo {
+  int axis = 0, side = 0;                     // face: axis, 0 = low, 1 = high
+  int a = 1, b = 2;                           // the two in-plane axes, in axis order
+  double pmin[2] = {0, 0}, pmax[2] = {0, 0};  // the patch, in (a, b)
+  double s = 0;                               // site edge 2 r_max (1 + gap)
+  long long na = 1, nb = 1;                   // sites along a, b
+  double rate = 0, massRate = 0, start = 0, end = 0;
+  int material = 0;
+  SizeDist size;
+  std::array<double, 3> v{};
+  double spread = 0;
+};
+
+/// Checks particles.inflow against the box, its periodic axes and the materials (ConfigError
+/// naming the key).
+std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid, int nMaterials);
 
 /// Checks every source against the box and the materials (same verdict on every rank: throws
 /// ConfigError naming the key) and returns each source's particle count and largest radius.

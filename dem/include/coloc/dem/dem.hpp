@@ -40,6 +40,19 @@ struct ContactHistory {
   std::array<double, 3> shear{}, roll{};
 };
 
+/// Particles that entered and left (particles.inflow, outflow faces), global totals.
+struct DemFlow {
+  long long countInitial = 0, countIn = 0, countOut = 0;
+  double massInitial = 0, massIn = 0, massOut = 0;
+  std::array<long long, 6> countOutByFace{};    // xlo, xhi, ylo, yhi, zlo, zhi
+  std::vector<long long> due, inserted;         // per inflow source: particles due, inserted
+  std::vector<double> dueMass;                  // per inflow source: mass of the particles due
+  std::vector<std::vector<long long>> waiting;  // per inflow source: due, not yet inserted
+  /// As numbers (checkpoint files) and back.
+  std::vector<double> pack() const;
+  static DemFlow unpack(const std::vector<double>& v);
+};
+
 /// The complete restartable state of one rank's owned particles (checkpoint/restart and
 /// re-balancing). particles holds owned particles only (nGhost = 0), with f, torque and fExt.
 struct DemState {
@@ -47,6 +60,7 @@ struct DemState {
   std::vector<ContactHistory> contacts;  // every history held by an owned particle
   double time = 0;
   long long steps = 0, rebuilds = 0;
+  DemFlow flow;  // the same on every rank
 };
 
 class DemSolver {
