@@ -1,6 +1,8 @@
 // coloc — the command-line driver.
 //
 //   coloc run CASE.json [--set key.path=value ...] [--out DIR] [--restart CHECKPOINT.h5]
+//   coloc plan CASE.json --ranks 28,56,1024 [--strategy S ...] [--set ...] [--out DIR]
+//                         layouts, work and traffic per rank for rank counts not run (one process)
 //   coloc keys            every case-file key, its type, default, range and meaning
 //   coloc --help
 //
@@ -14,6 +16,7 @@
 
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
+#include "plan.hpp"
 #include "run.hpp"
 
 int main(int argc, char** argv) {
@@ -38,6 +41,20 @@ int main(int argc, char** argv) {
                   "continue from this checkpoint (output.checkpoint_*) instead of the case's "
                   "initial condition, on any rank count; run.steps/run.end_time count from the "
                   "start of the original run");
+  coloc::PlanOptions planOpts;
+  auto* plan = app.add_subcommand(
+      "plan", "the blocks each strategy chooses for rank counts that are not run, and each "
+              "rank's cells, particles, ghosts and exchange bytes/messages per step (one "
+              "process): DIR/plan.json, DIR/plan.csv");
+  plan->add_option("case", planOpts.casePath, "case file")->required();
+  plan->add_option("--ranks", planOpts.ranks, "rank counts, comma-separated, e.g. 28,56,1024")
+      ->required();
+  plan->add_option("--strategy", planOpts.strategies,
+                   "uniform, balanced, independent (repeatable; default: all)");
+  plan->add_option("--set", planOpts.overrides, "override a case key (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+  plan->add_option("--out", planOpts.outDir, "output directory (default: out/<case name>/plan)");
   app.add_subcommand("keys", "list every case-file key with type, default, range and meaning");
 
   try {
@@ -57,6 +74,11 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("keys")) {
       if (world.isRoot()) std::cout << coloc::describeKeys();
       return 0;
+    }
+    if (app.got_subcommand("plan")) {
+      if (world.size() != 1)
+        throw coloc::Error("coloc plan runs in one process: start it without mpirun -n N");
+      return coloc::planCase(planOpts);
     }
     return coloc::runCase(world, opts);
   } catch (const coloc::Error& e) {

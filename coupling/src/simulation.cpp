@@ -87,14 +87,12 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   const Decomposition uniform = decompositionFromConfig(world, cfg);
   Layouts L{uniform, std::nullopt, strategy, CostModel{}, 1.0, 1.0};
   if (strategy == "uniform" || runMode(cfg) == RunMode::FluidOnly) return L;
-  const auto& g = uniform.grid();
   const bool independent = strategy == "independent";
   CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
-  if (independent)
-    model = CostModel{0.0, 1.0};  // the DEM's blocks: balanced by particle count
-  else if (cfg.integer("partition.calibrate_steps") > 0)
+  if (!independent && cfg.integer("partition.calibrate_steps") > 0)
     model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
   // Where the particles are: a DEM built on the uniform blocks, only to count them per cell.
+  // independent: the DEM's blocks are balanced by particle count.
   std::vector<double> cost;
   {
     Timers scratch;
@@ -103,47 +101,35 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
     const std::size_t n = p.nOwned;
     cost = cellCosts(uniform, std::span<const double>(p.x[0].data(), n),
                      std::span<const double>(p.x[1].data(), n),
-                     std::span<const double>(p.x[2].data(), n), model);
+                     std::span<const double>(p.x[2].data(), n),
+                     independent ? CostModel{0.0, 1.0} : model);
   }
-  const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
-  const int minCells = 2;  // the fluid's ghost layers
-  const auto dimsKey = cfg.intVec3(independent ? "partition.dem_dims" : "partition.dims");
-  const Int3 fixed{static_cast<int>(dimsKey[0]), static_cast<int>(dimsKey[1]),
-                   static_cast<int>(dimsKey[2])};
-  BalancedLayout best;
-  if (independent && fixed == Int3{0, 0, 0}) {
-    // The baseline keeps its physics apart: prefer a process grid other than the fluid's.
-    best.maxBlockCost = std::numeric_limits<double>::infinity();
-    const int size = world.size();
-    for (int px = 1; px <= size; ++px)
-      for (int py = 1; py <= size / px; ++py) {
-        if (size % (px * py)) continue;
-        const Int3 dims{px, py, size / (px * py)};
-        if (dims == uniform.dims() && size > 1) continue;
-        try {
-          const auto l = balanceBlocks(g, cost, size, minCells, gran, dims);
-          if (l.maxBlockCost < best.maxBlockCost) best = l;
-        } catch (const ConfigError&) {
-        }
-      }
-    if (!std::isfinite(best.maxBlockCost)) best = balanceBlocks(g, cost, size, minCells, gran);
-  } else {
-    best = balanceBlocks(g, cost, world.size(), minCells, gran, fixed);
-  }
-  const Decomposition balanced = Decomposition::fromCuts(world, g, best.cuts);
+  const StrategyInput in = strategyInput(cfg, world.size());
+  const StrategyBlocks b = independent ? chooseBlocks(strategy, in, {}, cost)
+                                       : chooseBlocks(strategy, in, cost, {});
   if (independent) {
-    L.particles = balanced;
+    L.particles = Decomposition::fromCuts(world, in.grid, b.particles->cuts);
     return L;
   }
-  L.fluid = balanced;
+  L.fluid = Decomposition::fromCuts(world, in.grid, b.fluid.cuts);
   L.model = model;
-  L.modelledImbalance = best.imbalance();
-  BalancedLayout uni;
-  uni.dims = uniform.dims();
-  uni.cuts = uniform.cuts();
-  evaluateLayout(g, cost, uni);
-  L.uniformImbalance = uni.imbalance();
+  L.modelledImbalance = b.modelledImbalance;
+  L.uniformImbalance = b.uniformImbalance;
   return L;
+}
+
+StrategyInput strategyInput(const Config& cfg, int ranks) {
+  StrategyInput in;
+  in.grid = gridFromConfig(cfg);
+  in.ranks = ranks;
+  const auto dims = cfg.intVec3("partition.dims"), dem = cfg.intVec3("partition.dem_dims");
+  for (int d = 0; d < 3; ++d) {
+    in.dims[d] = static_cast<int>(dims[d]);
+    in.demDims[d] = static_cast<int>(dem[d]);
+  }
+  in.minCells = minBlockCells(cfg);
+  in.granularity = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
+  return in;
 }
 
 Simulation::Simulation(const Config& cfg, Layouts layouts)
@@ -439,8 +425,8 @@ void Simulation::bookProxyTraffic(int valuesPerParticle, double seconds) {
     }
   }
   (void)valuesPerParticle;
-  timers_.book(Exchange::InterPhysicsRemote, remote, messages, seconds);
-  timers_.book(Exchange::InterPhysicsLocal, local, 0);
+  timers_.book(Exchange::InterPhysicsRemote, remote, messages, seconds, Traffic::Proxy);
+  timers_.book(Exchange::InterPhysicsLocal, local, 0, 0.0, Traffic::ForceHandover);
 }
 
 void Simulation::computeStencils() {
@@ -562,7 +548,7 @@ void Simulation::updateFluidCoefficients() {
     solidVolume_ = dec_.comm().sum(solid) * dec_.grid().cellVolume();
   }
   ScopedPhase t(timers_, Phase::FluidHalo);
-  halo_.gather(eps_, &timers_, Exchange::IntraPhysics);
+  halo_.gather(eps_, &timers_, Exchange::IntraPhysics, Traffic::CouplingHalo);
   fillWallGhostsByMirror(dec_, eps_);
   fluid_->markCoefficientsChanged();
 }

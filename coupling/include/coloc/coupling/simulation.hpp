@@ -62,6 +62,7 @@
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/halo.hpp"
 #include "coloc/partition/output.hpp"
+#include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {
 
@@ -79,6 +80,10 @@ struct Layouts {
   double modelledImbalance = 1.0;  // balanced: max/avg modelled block cost
   double uniformImbalance = 1.0;   // balanced: the same for the uniform blocks
 };
+
+/// The case's constraints on the blocks of `ranks` ranks (partition.dims, partition.dem_dims,
+/// run.mode, particles.bin_cells): what chooseBlocks (partition/strategy.hpp) takes.
+StrategyInput strategyInput(const Config& cfg, int ranks);
 
 class Simulation {
  public:
