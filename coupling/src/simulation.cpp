@@ -77,6 +77,55 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
 
 }  // namespace
 
+StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
+                                  const StrategyInput& in, const std::vector<double>& cost,
+                                  bool costIsCount) {
+  StrategyBlocks b;
+  b.strategy = strategy;
+  std::string err;
+  std::vector<int> packed;
+  double imb[2] = {1.0, 1.0};
+  if (comm.isRoot()) {
+    try {
+      b = costIsCount ? chooseBlocks(strategy, in, {}, cost) : chooseBlocks(strategy, in, cost, {});
+      for (const Blocks* blk : {&b.fluid, b.particles ? &*b.particles : nullptr}) {
+        if (!blk) continue;
+        for (int d = 0; d < 3; ++d) packed.push_back(blk->dims[d]);
+        for (int d = 0; d < 3; ++d) packed.insert(packed.end(), blk->cuts[d].begin(), blk->cuts[d].end());
+      }
+      imb[0] = b.modelledImbalance;
+      imb[1] = b.uniformImbalance;
+    } catch (const Error& e) {
+      err = e.what();
+    }
+  }
+  err = comm.broadcast(err);
+  if (!err.empty()) throw Error(err);
+  int len = static_cast<int>(packed.size());
+  comm.broadcast(std::span<int>(&len, 1));
+  packed.resize(static_cast<std::size_t>(len));
+  comm.broadcast(std::span<int>(packed));
+  comm.broadcast(std::span<double>(imb, 2));
+  if (comm.isRoot()) return b;
+  std::size_t q = 0;
+  const auto unpack = [&](Blocks& blk) {
+    for (int d = 0; d < 3; ++d) blk.dims[d] = packed[q++];
+    for (int d = 0; d < 3; ++d) {
+      blk.cuts[d].assign(packed.begin() + static_cast<std::ptrdiff_t>(q),
+                         packed.begin() + static_cast<std::ptrdiff_t>(q) + blk.dims[d] + 1);
+      q += static_cast<std::size_t>(blk.dims[d]) + 1;
+    }
+  };
+  unpack(b.fluid);
+  if (q < packed.size()) {
+    b.particles.emplace();
+    unpack(*b.particles);
+  }
+  b.modelledImbalance = imb[0];
+  b.uniformImbalance = imb[1];
+  return b;
+}
+
 Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   const std::string strategy = cfg.string("partition.strategy");
   if (cfg.integer("partition.rebalance_interval") > 0 && strategy != "balanced")
@@ -93,20 +142,21 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
     model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
   // Where the particles are: a DEM built on the uniform blocks, only to count them per cell.
   // independent: the DEM's blocks are balanced by particle count.
+  // The cost of every cell is gathered on rank 0 only (cellCostsOnRoot), which chooses the blocks
+  // and sends them to every rank: no rank but the root holds anything of the global cell count.
   std::vector<double> cost;
   {
     Timers scratch;
     dem::DemSolver probe(uniform, cfg, scratch);
     const auto& p = probe.particles();
     const std::size_t n = p.nOwned;
-    cost = cellCosts(uniform, std::span<const double>(p.x[0].data(), n),
-                     std::span<const double>(p.x[1].data(), n),
-                     std::span<const double>(p.x[2].data(), n),
-                     independent ? CostModel{0.0, 1.0} : model);
+    cost = cellCostsOnRoot(uniform, std::span<const double>(p.x[0].data(), n),
+                           std::span<const double>(p.x[1].data(), n),
+                           std::span<const double>(p.x[2].data(), n),
+                           independent ? CostModel{0.0, 1.0} : model);
   }
   const StrategyInput in = strategyInput(cfg, world.size());
-  const StrategyBlocks b = independent ? chooseBlocks(strategy, in, {}, cost)
-                                       : chooseBlocks(strategy, in, cost, {});
+  const StrategyBlocks b = chooseBlocksOnRoot(world, strategy, in, cost, independent);
   if (independent) {
     L.particles = Decomposition::fromCuts(world, in.grid, b.particles->cuts);
     return L;

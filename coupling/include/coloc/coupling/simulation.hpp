@@ -84,6 +84,12 @@ struct Layouts {
 /// The case's constraints on the blocks of `ranks` ranks (partition.dims, partition.dem_dims,
 /// run.mode, particles.bin_cells): what chooseBlocks (partition/strategy.hpp) takes.
 StrategyInput strategyInput(const Config& cfg, int ranks);
+/// chooseBlocks on rank 0, which alone holds `cost` (cellCostsOnRoot; the particles per cell
+/// when `costIsCount`, for the independent strategy), and the result on every rank. Collective;
+/// an error of the root is raised on every rank.
+StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
+                                  const StrategyInput& in, const std::vector<double>& cost,
+                                  bool costIsCount);
 
 class Simulation {
  public:
