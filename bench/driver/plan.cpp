@@ -47,9 +47,9 @@ int planCase(const PlanOptions& opts) {
       throw ConfigError("partition.strategy", "--strategy: unknown strategy '" + s +
                                                   "' (uniform, balanced, independent)");
   const auto ranks = parseRankList(opts.ranks);
-  const std::string outDir = opts.outDir.empty()
-                                 ? (std::filesystem::path("out") / cfg.string("name") / "plan").string()
-                                 : opts.outDir;
+  const std::string outDir =
+      opts.outDir.empty() ? (std::filesystem::path("out") / cfg.string("name") / "plan").string()
+                          : opts.outDir;
   makeDirectories(outDir);
   const coupling::PlanCase pc = coupling::planCase(cfg);
   const double tSetup = MPI_Wtime() - t0;
@@ -62,9 +62,9 @@ int planCase(const PlanOptions& opts) {
   std::printf("coloc plan: %s, %lld cells, %lld particles, mode %s (set-up %.2f s)\n",
               cfg.string("name").c_str(), pc.grid.cellCount(),
               static_cast<long long>(pc.particles.x[0].size()), runModeName(pc.mode), tSetup);
-  std::printf("%-12s %6s %-10s %-10s %9s %12s %12s %12s %12s %12s\n", "strategy", "ranks",
-              "fluid", "dem", "imbalance", "max cells", "max parts", "halo MB/st",
-              "ghost MB/st", "inter MB/st");
+  std::printf("%-12s %6s %-10s %-10s %9s %12s %12s %12s %12s %12s\n", "strategy", "ranks", "fluid",
+              "dem", "imbalance", "max cells", "max parts", "halo MB/st", "ghost MB/st",
+              "inter MB/st");
   for (const auto& strategy : strategies)
     for (const int n : ranks) {
       const coupling::LayoutPlan L = coupling::planLayout(pc, strategy, n);
@@ -75,7 +75,9 @@ int planCase(const PlanOptions& opts) {
         std::printf("%-12s %6d  refused: %s\n", strategy.c_str(), n, L.error.c_str());
         continue;
       }
-      const auto dims = [](const Blocks& b) { return Json::array({b.dims[0], b.dims[1], b.dims[2]}); };
+      const auto dims = [](const Blocks& b) {
+        return Json::array({b.dims[0], b.dims[1], b.dims[2]});
+      };
       j["fluid_dims"] = dims(L.fluid);
       j["particle_dims"] = dims(L.particles);
       j["fluid_cuts"] = {L.fluid.cuts[0], L.fluid.cuts[1], L.fluid.cuts[2]};

@@ -16,7 +16,9 @@ constexpr int kFluidGhost = 2, kCouplingGhost = 1;
 // Doubles per row (dem.cpp kGhostUpdate; Simulation::gatherParticles kRow; forces back: 3).
 constexpr long long kGhostUpdate = 9, kProxyRow = 12, kForceRow = 3;
 
-std::size_t k(Traffic t) { return static_cast<std::size_t>(t); }
+std::size_t k(Traffic t) {
+  return static_cast<std::size_t>(t);
+}
 
 /// One field layout of a block: owned extent n, ghost g, stagger s (partition/field.hpp).
 struct Layout {
@@ -32,8 +34,8 @@ struct Layout {
 /// HaloPlan's booking for `fields` fields of layout `l` on rank r: gather sends the owned edge
 /// (g + s layers on the low side, g on the high), scatterSum sends the ghosts (g low, g + s high);
 /// a message per side with a peer other than the rank itself.
-void halo(const GlobalGrid& grid, const Blocks& b, int r, const Layout& l, int fields,
-          bool reverse, long long times, TrafficCount& out) {
+void halo(const GlobalGrid& grid, const Blocks& b, int r, const Layout& l, int fields, bool reverse,
+          long long times, TrafficCount& out) {
   for (int d = 0; d < 3; ++d)
     for (int side = 0; side < 2; ++side) {
       const int peer = b.neighbor(grid, r, d, side == 0 ? -1 : 1);
@@ -78,8 +80,9 @@ long long substepsPerStep(const Config& cfg, RunMode mode) {
     case RunMode::Coupled: {
       const long long n = cfg.integer("coupling.dem_substeps");
       if (n > 0) return n;
-      return std::max<long long>(1, static_cast<long long>(std::floor(
-                                        cfg.number("fluid.dt") / cfg.number("particles.dt") + 1e-9)));
+      return std::max<long long>(
+          1, static_cast<long long>(
+                 std::floor(cfg.number("fluid.dt") / cfg.number("particles.dt") + 1e-9)));
     }
   }
   return 0;
@@ -248,7 +251,8 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
   std::vector<std::array<std::vector<double>, 3>> pending(static_cast<std::size_t>(ranks));
   std::vector<std::size_t> before(static_cast<std::size_t>(ranks));
   for (int d = 0; d < 3; ++d) {
-    for (int r = 0; r < ranks; ++r) before[static_cast<std::size_t>(r)] = P[static_cast<std::size_t>(r)][0].size();
+    for (int r = 0; r < ranks; ++r)
+      before[static_cast<std::size_t>(r)] = P[static_cast<std::size_t>(r)][0].size();
     for (int r = 0; r < ranks; ++r) {
       const int nLo = D.neighbor(g, r, d, -1), nHi = D.neighbor(g, r, d, +1);
       if (nLo < 0 && nHi < 0) continue;
@@ -297,8 +301,8 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
   double sum = 0, mx = 0;
   const double wc = cfg.number("partition.cost.cell"), wp = cfg.number("partition.cost.particle");
   for (auto& R : out.rank) {
-    R.cost = (fluidOn ? wc * static_cast<double>(R.cells) : 0.0) +
-             wp * static_cast<double>(R.particles);
+    R.cost =
+        (fluidOn ? wc * static_cast<double>(R.cells) : 0.0) + wp * static_cast<double>(R.particles);
     sum += R.cost;
     mx = std::max(mx, R.cost);
   }

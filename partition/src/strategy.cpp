@@ -35,7 +35,9 @@ int Blocks::blockAlong(int d, int cell) const {
   return static_cast<int>(std::upper_bound(c.begin(), c.end(), cell) - c.begin()) - 1;
 }
 
-Blocks blocksOf(const Decomposition& dec) { return {dec.dims(), dec.cuts()}; }
+Blocks blocksOf(const Decomposition& dec) {
+  return {dec.dims(), dec.cuts()};
+}
 
 Blocks uniformBlocks(const StrategyInput& in) {
   Blocks b;
@@ -47,9 +49,8 @@ Blocks uniformBlocks(const StrategyInput& in) {
                                             std::to_string(in.ranks) + " ranks");
   for (int d = 0; d < 3; ++d) {
     if (b.dims[d] > in.grid.cells[d])
-      throw ConfigError("partition.dims", std::to_string(b.dims[d]) + " ranks along " +
-                                              "xyz"[d] + " but only " +
-                                              std::to_string(in.grid.cells[d]) +
+      throw ConfigError("partition.dims", std::to_string(b.dims[d]) + " ranks along " + "xyz"[d] +
+                                              " but only " + std::to_string(in.grid.cells[d]) +
                                               " cells: each block needs a cell");
     b.cuts[d] = Decomposition::evenCuts(in.grid.cells[d], b.dims[d]);
   }

@@ -99,8 +99,7 @@ TEST_P(PlanExact, FirstStepLedgerEqualsPlanPerRankAndKind) {
     EXPECT_EQ(R.perStep[t].bytes, sim.timers().bytes(kind))
         << P.name << " " << P.strategy << " rank " << me << ": " << kTrafficNames[t] << " bytes";
     EXPECT_EQ(R.perStep[t].messages, sim.timers().messages(kind))
-        << P.name << " " << P.strategy << " rank " << me << ": " << kTrafficNames[t]
-        << " messages";
+        << P.name << " " << P.strategy << " rank " << me << ": " << kTrafficNames[t] << " messages";
     any += R.perStep[t].bytes;
   }
   // Non-trivial: on more than one rank something moves between ranks in every case.

@@ -59,9 +59,9 @@ TEST(ProcessGrid, KeepsMpiDimsCreateWhereLegal) {
 
 TEST(ProcessGrid, LegalWheneverOneExistsOverManyCases) {
   int checked = 0, impossible = 0;
-  for (const Int3 cells : {Int3{48, 4, 48}, Int3{240, 20, 240}, Int3{72, 6, 72},
-                           Int3{110, 22, 22}, Int3{4, 4, 4}, Int3{3, 7, 2}, Int3{1, 1, 64},
-                           Int3{16, 2, 2}, Int3{5, 5, 5}, Int3{100, 1, 1}, Int3{8, 8, 2}})
+  for (const Int3 cells : {Int3{48, 4, 48}, Int3{240, 20, 240}, Int3{72, 6, 72}, Int3{110, 22, 22},
+                           Int3{4, 4, 4}, Int3{3, 7, 2}, Int3{1, 1, 64}, Int3{16, 2, 2},
+                           Int3{5, 5, 5}, Int3{100, 1, 1}, Int3{8, 8, 2}})
     for (int ranks = 1; ranks <= 1100; ranks += (ranks < 70 ? 1 : 37))
       for (int minCells : {1, 2})
         for (const Int3 fixed : {Int3{0, 0, 0}, Int3{0, 1, 0}, Int3{2, 0, 0}}) {
@@ -77,8 +77,8 @@ TEST(ProcessGrid, LegalWheneverOneExistsOverManyCases) {
                 << cells[0] << "x" << cells[1] << "x" << cells[2] << " on " << ranks;
             EXPECT_EQ(1LL * d[0] * d[1] * d[2], ranks);
             EXPECT_TRUE(legal(g, d, minCells))
-                << cells[0] << "x" << cells[1] << "x" << cells[2] << " on " << ranks << ": "
-                << d[0] << "x" << d[1] << "x" << d[2];
+                << cells[0] << "x" << cells[1] << "x" << cells[2] << " on " << ranks << ": " << d[0]
+                << "x" << d[1] << "x" << d[2];
             for (int a = 0; a < 3; ++a) {
               if (fixed[a] > 0) {
                 EXPECT_EQ(d[a], fixed[a]);

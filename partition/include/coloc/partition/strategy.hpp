@@ -53,10 +53,10 @@ struct StrategyInput {
 
 struct StrategyBlocks {
   std::string strategy;
-  Blocks fluid;                    // the co-located blocks (uniform, balanced) or the fluid's
+  Blocks fluid;                     // the co-located blocks (uniform, balanced) or the fluid's
   std::optional<Blocks> particles;  // independent: the DEM's own blocks
-  double modelledImbalance = 1.0;  // balanced: max/avg modelled block cost
-  double uniformImbalance = 1.0;   // balanced: the same for the uniform blocks
+  double modelledImbalance = 1.0;   // balanced: max/avg modelled block cost
+  double uniformImbalance = 1.0;    // balanced: the same for the uniform blocks
 };
 
 /// The uniform strategy's blocks.
