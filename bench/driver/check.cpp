@@ -164,50 +164,24 @@ int checkCase(const CheckOptions& opts) {
   std::printf("\n");
 
   // The layouts each strategy would choose for N ranks (the run's own partition code).
-  const auto dk = cfg.intVec3("partition.dims");
-  const Int3 fixed{static_cast<int>(dk[0]), static_cast<int>(dk[1]), static_cast<int>(dk[2])};
-  std::vector<Plan> plans;
-  std::array<std::vector<int>, 3> uniformCuts;
-  Int3 uniformDims{};
-  std::string uniformError;
-  try {
-    uniformDims = Decomposition::chooseDims(N, g, fixed);
-    for (int a = 0; a < 3; ++a) {
-      if (uniformDims[a] > g.cells[a])
-        throw ConfigError("partition.dims", std::to_string(uniformDims[a]) + " ranks along " +
-                                                std::string(1, "xyz"[a]) + " but only " +
-                                                std::to_string(g.cells[a]) + " cells");
-      uniformCuts[a] = Decomposition::evenCuts(g.cells[a], uniformDims[a]);
-    }
-  } catch (const Error& e) {
-    uniformError = e.what();
-  }
+  const StrategyInput in = coupling::strategyInput(cfg, N);
   const CostModel caseModel{cfg.number("partition.cost.cell"),
                             cfg.number("partition.cost.particle")};
   std::vector<double> caseCost(particlesPerCell.size());
   for (std::size_t c = 0; c < caseCost.size(); ++c)
     caseCost[c] = caseModel.perCell + caseModel.perParticle * particlesPerCell[c];
+  std::vector<Plan> plans;
   for (const char* s : {"uniform", "balanced", "independent"}) {
     Plan p;
     p.strategy = s;
-    p.error = uniformError;
-    if (p.error.empty()) {
-      p.fluidCuts = p.particleCuts = uniformCuts;
-      try {
-        if (p.strategy != "uniform" && mode != RunMode::FluidOnly) {
-          const bool independent = p.strategy == "independent";
-          std::vector<double> cost = caseCost;
-          if (independent)
-            for (std::size_t c = 0; c < cost.size(); ++c) cost[c] = particlesPerCell[c];
-          const BalancedLayout l = coupling::planBlocks(cfg, g, cost, N, uniformDims, independent);
-          if (independent)
-            p.particleCuts = l.cuts;
-          else
-            p.fluidCuts = p.particleCuts = l.cuts;
-        }
-      } catch (const Error& e) {
-        p.error = e.what();
-      }
+    try {
+      // As Simulation::chooseLayouts: a fluid-only run keeps the uniform blocks.
+      const std::string used = mode == RunMode::FluidOnly ? "uniform" : p.strategy;
+      const StrategyBlocks b = chooseBlocks(used, in, caseCost, particlesPerCell);
+      p.fluidCuts = b.fluid.cuts;
+      p.particleCuts = b.particles ? b.particles->cuts : b.fluid.cuts;
+    } catch (const Error& e) {
+      p.error = e.what();
     }
     plans.push_back(std::move(p));
   }

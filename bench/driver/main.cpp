@@ -3,6 +3,8 @@
 //   coloc run CASE.json [--set key.path=value ...] [--out DIR] [--restart CHECKPOINT.h5]
 //   coloc keys [PREFIX]   every case-file key (or those under PREFIX): type, default, range, meaning
 //   coloc check CASE.json [--ranks N] [--set ...]   validate, show layouts/memory/time steps
+//   coloc plan CASE.json --ranks 28,56,1024 [--strategy S ...] [--set ...] [--out DIR]
+//                         layouts, work and traffic per rank for rank counts not run (one process)
 //   coloc --help
 //
 // Errors in the input are found identically on every rank: rank 0 prints one message naming the
@@ -16,6 +18,7 @@
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
 #include "check.hpp"
+#include "plan.hpp"
 #include "run.hpp"
 
 int main(int argc, char** argv) {
@@ -56,6 +59,20 @@ int main(int argc, char** argv) {
       ->take_all()
       ->allow_extra_args(false);
   checkCmd->add_flag("--cuts", check.verbose, "print every strategy's cuts");
+  coloc::PlanOptions planOpts;
+  auto* plan = app.add_subcommand(
+      "plan", "the blocks each strategy chooses for rank counts that are not run, and each "
+              "rank's cells, particles, ghosts and exchange bytes/messages per step (one "
+              "process): DIR/plan.json, DIR/plan.csv");
+  plan->add_option("case", planOpts.casePath, "case file")->required();
+  plan->add_option("--ranks", planOpts.ranks, "rank counts, comma-separated, e.g. 28,56,1024")
+      ->required();
+  plan->add_option("--strategy", planOpts.strategies,
+                   "uniform, balanced, independent (repeatable; default: all)");
+  plan->add_option("--set", planOpts.overrides, "override a case key (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+  plan->add_option("--out", planOpts.outDir, "output directory (default: out/<case name>/plan)");
 
   try {
     app.parse(argc, argv);
@@ -93,6 +110,11 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
       }
       return world.max(status);
+    }
+    if (app.got_subcommand("plan")) {
+      if (world.size() != 1)
+        throw coloc::Error("coloc plan runs in one process: start it without mpirun -n N");
+      return coloc::planCase(planOpts);
     }
     return coloc::runCase(world, opts);
   } catch (const coloc::Error& e) {

@@ -54,23 +54,34 @@ void Timers::add(Phase p, double wallSeconds, double cpuSeconds) {
   ++s.calls;
 }
 
-void Timers::book(Exchange kind, long long bytes, long long messages, double seconds) {
+void Timers::book(Exchange kind, long long bytes, long long messages, double seconds,
+                  Traffic traffic) {
   auto& l = ledger_[idx(kind)];
   l.bytes += bytes;
   l.messages += messages;
   l.seconds += seconds;
+  if (traffic == Traffic::Auto)
+    traffic = kind == Exchange::IntraPhysics         ? Traffic::FluidHalo
+              : kind == Exchange::InterPhysicsRemote ? Traffic::DepositSum
+                                                     : Traffic::ForceHandover;
+  auto& t = traffic_[static_cast<std::size_t>(traffic)];
+  t.bytes += bytes;
+  t.messages += messages;
+  t.seconds += seconds;
 }
 
 void Timers::beginRun() {
   const Slot setup = slots_[idx(Phase::Setup)];
   slots_ = {};
   ledger_ = {};
+  traffic_ = {};
   slots_[idx(Phase::Setup)] = setup;
 }
 
 void Timers::reset() {
   slots_ = {};
   ledger_ = {};
+  traffic_ = {};
   nActive_ = 0;
 }
 
@@ -104,6 +115,15 @@ Json Timers::report(const Comm& comm, double stepWallSeconds) const {
                                           {"time_s_max", t.max}};
   }
   out["exchange"] = ex;
+  Json kinds = Json::object();
+  for (std::size_t k = 0; k < traffic_.size(); ++k) {
+    const auto& t = traffic_[k];
+    kinds[std::string(kTrafficNames[k])] = {{"bytes", comm.sum(t.bytes)},
+                                            {"messages", comm.sum(t.messages)},
+                                            {"bytes_max", comm.max(t.bytes)},
+                                            {"messages_max", comm.max(t.messages)}};
+  }
+  out["exchange_kinds"] = kinds;
   const double denom = stepWallSeconds > 0 ? stepWallSeconds : 1.0;
   out["fractions"] = {
       {"fv", catAvg[static_cast<std::size_t>(Category::Fluid)] / denom},

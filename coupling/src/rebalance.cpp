@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "coloc/core/error.hpp"
 #include "coloc/partition/balance.hpp"
+#include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {
 
@@ -36,34 +38,64 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
 
   const auto& p = dem->particles();
   const std::size_t m = p.nOwned;
-  const auto cost = cellCosts(dec, std::span<const double>(p.x[0].data(), m),
-                              std::span<const double>(p.x[1].data(), m),
-                              std::span<const double>(p.x[2].data(), m), plan.model);
-  BalancedLayout current;
-  current.dims = dec.dims();
-  current.cuts = dec.cuts();
-  evaluateLayout(g, cost, current);
+  // Rank 0 alone gathers the cost of every cell (cellCostsOnRoot), evaluates the blocks and
+  // sends the verdict and the new cuts to every rank.
+  const auto cost = cellCostsOnRoot(dec, std::span<const double>(p.x[0].data(), m),
+                                    std::span<const double>(p.x[1].data(), m),
+                                    std::span<const double>(p.x[2].data(), m), plan.model);
   const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
   const auto fixed = cfg.intVec3("partition.dims");
-  const BalancedLayout best =
-      balanceBlocks(g, cost, comm.size(), /*minCells=*/2, gran,
-                    Int3{static_cast<int>(fixed[0]), static_cast<int>(fixed[1]),
-                         static_cast<int>(fixed[2])});
-  plan.currentImbalance = current.imbalance();
-  plan.newImbalance = best.imbalance();
-  plan.gain = best.maxBlockCost > 0 ? current.maxBlockCost / best.maxBlockCost : 1.0;
-  if (plan.gain < cfg.number("partition.rebalance_threshold")) return plan;
-  BalancedLayout even;  // what uniform blocks would give now, for the report
-  {
-    const Decomposition u = Decomposition::uniform(
-        comm, g, Int3{static_cast<int>(fixed[0]), static_cast<int>(fixed[1]),
-                      static_cast<int>(fixed[2])});
-    even.dims = u.dims();
-    even.cuts = u.cuts();
-    evaluateLayout(g, cost, even);
+  const Int3 fixedDims{static_cast<int>(fixed[0]), static_cast<int>(fixed[1]),
+                       static_cast<int>(fixed[2])};
+  double verdict[3] = {1.0, 1.0, 1.0};  // current imbalance, new imbalance, gain
+  double evenImbalance = 1.0;
+  std::vector<int> packed;  // dims, then the cuts of the new blocks
+  std::string err;
+  if (comm.isRoot()) {
+    try {
+      BalancedLayout current;
+      current.dims = dec.dims();
+      current.cuts = dec.cuts();
+      evaluateLayout(g, cost, current);
+      const BalancedLayout best =
+          balanceBlocks(g, cost, comm.size(), /*minCells=*/2, gran, fixedDims);
+      verdict[0] = current.imbalance();
+      verdict[1] = best.imbalance();
+      verdict[2] = best.maxBlockCost > 0 ? current.maxBlockCost / best.maxBlockCost : 1.0;
+      BalancedLayout even;  // what uniform blocks would give now, for the report
+      StrategyInput in = strategyInput(cfg, comm.size());
+      const Blocks u = uniformBlocks(in);
+      even.dims = u.dims;
+      even.cuts = u.cuts;
+      evaluateLayout(g, cost, even);
+      evenImbalance = even.imbalance();
+      for (int d = 0; d < 3; ++d) packed.push_back(best.dims[d]);
+      for (int d = 0; d < 3; ++d) packed.insert(packed.end(), best.cuts[d].begin(), best.cuts[d].end());
+    } catch (const Error& e) {
+      err = e.what();
+    }
   }
-  Layouts L{Decomposition::fromCuts(comm, g, best.cuts), std::nullopt, "balanced", plan.model,
-            best.imbalance(), even.imbalance()};
+  err = comm.broadcast(err);
+  if (!err.empty()) throw Error(err);
+  comm.broadcast(std::span<double>(verdict, 3));
+  comm.broadcast(std::span<double>(&evenImbalance, 1));
+  plan.currentImbalance = verdict[0];
+  plan.newImbalance = verdict[1];
+  plan.gain = verdict[2];
+  if (plan.gain < cfg.number("partition.rebalance_threshold")) return plan;
+  int len = static_cast<int>(packed.size());
+  comm.broadcast(std::span<int>(&len, 1));
+  packed.resize(static_cast<std::size_t>(len));
+  comm.broadcast(std::span<int>(packed));
+  std::array<std::vector<int>, 3> cuts;
+  std::size_t q = 3;
+  for (int d = 0; d < 3; ++d) {
+    cuts[d].assign(packed.begin() + static_cast<std::ptrdiff_t>(q),
+                   packed.begin() + static_cast<std::ptrdiff_t>(q) + packed[static_cast<std::size_t>(d)] + 1);
+    q += static_cast<std::size_t>(packed[static_cast<std::size_t>(d)]) + 1;
+  }
+  Layouts L{Decomposition::fromCuts(comm, g, std::move(cuts)), std::nullopt, "balanced",
+            plan.model, verdict[1], evenImbalance};
   plan.layouts = std::move(L);
   return plan;
 }

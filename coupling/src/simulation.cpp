@@ -81,33 +81,53 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
 
 }  // namespace
 
-BalancedLayout planBlocks(const Config& cfg, const GlobalGrid& g, const std::vector<double>& cost,
-                          int size, Int3 uniformDims, bool independent) {
-  const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
-  const int minCells = 2;  // the fluid's ghost layers
-  const auto dimsKey = cfg.intVec3(independent ? "partition.dem_dims" : "partition.dims");
-  const Int3 fixed{static_cast<int>(dimsKey[0]), static_cast<int>(dimsKey[1]),
-                   static_cast<int>(dimsKey[2])};
-  BalancedLayout best;
-  if (independent && fixed == Int3{0, 0, 0}) {
-    // The baseline keeps its physics apart: prefer a process grid other than the fluid's.
-    best.maxBlockCost = std::numeric_limits<double>::infinity();
-    for (int px = 1; px <= size; ++px)
-      for (int py = 1; py <= size / px; ++py) {
-        if (size % (px * py)) continue;
-        const Int3 dims{px, py, size / (px * py)};
-        if (dims == uniformDims && size > 1) continue;
-        try {
-          const auto l = balanceBlocks(g, cost, size, minCells, gran, dims);
-          if (l.maxBlockCost < best.maxBlockCost) best = l;
-        } catch (const ConfigError&) {
-        }
+StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
+                                  const StrategyInput& in, const std::vector<double>& cost,
+                                  bool costIsCount) {
+  StrategyBlocks b;
+  b.strategy = strategy;
+  std::string err;
+  std::vector<int> packed;
+  double imb[2] = {1.0, 1.0};
+  if (comm.isRoot()) {
+    try {
+      b = costIsCount ? chooseBlocks(strategy, in, {}, cost) : chooseBlocks(strategy, in, cost, {});
+      for (const Blocks* blk : {&b.fluid, b.particles ? &*b.particles : nullptr}) {
+        if (!blk) continue;
+        for (int d = 0; d < 3; ++d) packed.push_back(blk->dims[d]);
+        for (int d = 0; d < 3; ++d) packed.insert(packed.end(), blk->cuts[d].begin(), blk->cuts[d].end());
       }
-    if (!std::isfinite(best.maxBlockCost)) best = balanceBlocks(g, cost, size, minCells, gran);
-  } else {
-    best = balanceBlocks(g, cost, size, minCells, gran, fixed);
+      imb[0] = b.modelledImbalance;
+      imb[1] = b.uniformImbalance;
+    } catch (const Error& e) {
+      err = e.what();
+    }
   }
-  return best;
+  err = comm.broadcast(err);
+  if (!err.empty()) throw Error(err);
+  int len = static_cast<int>(packed.size());
+  comm.broadcast(std::span<int>(&len, 1));
+  packed.resize(static_cast<std::size_t>(len));
+  comm.broadcast(std::span<int>(packed));
+  comm.broadcast(std::span<double>(imb, 2));
+  if (comm.isRoot()) return b;
+  std::size_t q = 0;
+  const auto unpack = [&](Blocks& blk) {
+    for (int d = 0; d < 3; ++d) blk.dims[d] = packed[q++];
+    for (int d = 0; d < 3; ++d) {
+      blk.cuts[d].assign(packed.begin() + static_cast<std::ptrdiff_t>(q),
+                         packed.begin() + static_cast<std::ptrdiff_t>(q) + blk.dims[d] + 1);
+      q += static_cast<std::size_t>(blk.dims[d]) + 1;
+    }
+  };
+  unpack(b.fluid);
+  if (q < packed.size()) {
+    b.particles.emplace();
+    unpack(*b.particles);
+  }
+  b.modelledImbalance = imb[0];
+  b.uniformImbalance = imb[1];
+  return b;
 }
 
 Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
@@ -120,39 +140,50 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   const Decomposition uniform = decompositionFromConfig(world, cfg);
   Layouts L{uniform, std::nullopt, strategy, CostModel{}, 1.0, 1.0};
   if (strategy == "uniform" || runMode(cfg) == RunMode::FluidOnly) return L;
-  const auto& g = uniform.grid();
   const bool independent = strategy == "independent";
   CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
-  if (independent)
-    model = CostModel{0.0, 1.0};  // the DEM's blocks: balanced by particle count
-  else if (cfg.integer("partition.calibrate_steps") > 0)
+  if (!independent && cfg.integer("partition.calibrate_steps") > 0)
     model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
   // Where the particles are: a DEM built on the uniform blocks, only to count them per cell.
+  // independent: the DEM's blocks are balanced by particle count.
+  // The cost of every cell is gathered on rank 0 only (cellCostsOnRoot), which chooses the blocks
+  // and sends them to every rank: no rank but the root holds anything of the global cell count.
   std::vector<double> cost;
   {
     Timers scratch;
     dem::DemSolver probe(uniform, cfg, scratch);
     const auto& p = probe.particles();
     const std::size_t n = p.nOwned;
-    cost = cellCosts(uniform, std::span<const double>(p.x[0].data(), n),
-                     std::span<const double>(p.x[1].data(), n),
-                     std::span<const double>(p.x[2].data(), n), model);
+    cost = cellCostsOnRoot(uniform, std::span<const double>(p.x[0].data(), n),
+                           std::span<const double>(p.x[1].data(), n),
+                           std::span<const double>(p.x[2].data(), n),
+                           independent ? CostModel{0.0, 1.0} : model);
   }
-  const BalancedLayout best = planBlocks(cfg, g, cost, world.size(), uniform.dims(), independent);
-  const Decomposition balanced = Decomposition::fromCuts(world, g, best.cuts);
+  const StrategyInput in = strategyInput(cfg, world.size());
+  const StrategyBlocks b = chooseBlocksOnRoot(world, strategy, in, cost, independent);
   if (independent) {
-    L.particles = balanced;
+    L.particles = Decomposition::fromCuts(world, in.grid, b.particles->cuts);
     return L;
   }
-  L.fluid = balanced;
+  L.fluid = Decomposition::fromCuts(world, in.grid, b.fluid.cuts);
   L.model = model;
-  L.modelledImbalance = best.imbalance();
-  BalancedLayout uni;
-  uni.dims = uniform.dims();
-  uni.cuts = uniform.cuts();
-  evaluateLayout(g, cost, uni);
-  L.uniformImbalance = uni.imbalance();
+  L.modelledImbalance = b.modelledImbalance;
+  L.uniformImbalance = b.uniformImbalance;
   return L;
+}
+
+StrategyInput strategyInput(const Config& cfg, int ranks) {
+  StrategyInput in;
+  in.grid = gridFromConfig(cfg);
+  in.ranks = ranks;
+  const auto dims = cfg.intVec3("partition.dims"), dem = cfg.intVec3("partition.dem_dims");
+  for (int d = 0; d < 3; ++d) {
+    in.dims[d] = static_cast<int>(dims[d]);
+    in.demDims[d] = static_cast<int>(dem[d]);
+  }
+  in.minCells = minBlockCells(cfg);
+  in.granularity = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
+  return in;
 }
 
 Simulation::Simulation(const Config& cfg, Layouts layouts)
@@ -456,8 +487,10 @@ void Simulation::bookProxyTraffic(int valuesPerParticle, double seconds) {
   }
   (void)valuesPerParticle;
   // The time goes with the bytes: across ranks when any row left the rank.
-  timers_.book(Exchange::InterPhysicsRemote, remote, messages, messages > 0 ? seconds : 0.0);
-  timers_.book(Exchange::InterPhysicsLocal, local, 0, messages > 0 ? 0.0 : seconds);
+  timers_.book(Exchange::InterPhysicsRemote, remote, messages, messages > 0 ? seconds : 0.0,
+               Traffic::Proxy);
+  timers_.book(Exchange::InterPhysicsLocal, local, 0, messages > 0 ? 0.0 : seconds,
+               Traffic::ForceHandover);
 }
 
 void Simulation::computeStencils() {
@@ -582,7 +615,7 @@ void Simulation::updateFluidCoefficients() {
     solidVolume_ = dec_.comm().sum(solid) * dec_.grid().cellVolume();
   }
   ScopedPhase t(timers_, Phase::FluidHalo);
-  halo_.gather(eps_, &timers_, Exchange::IntraPhysics);
+  halo_.gather(eps_, &timers_, Exchange::IntraPhysics, Traffic::CouplingHalo);
   fillWallGhostsByMirror(dec_, eps_);
   fluid_->markCoefficientsChanged();
 }

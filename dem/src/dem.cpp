@@ -433,9 +433,12 @@ void DemSolver::Impl::readMaterials(const Config& cfg) {
   }
 }
 
-void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total) {
+BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
+                    const std::array<std::vector<int>, 3>& cuts, double dmax, double skin,
+                    long long total) {
   const bool any = total > 0;
-  const auto& grid = dec.grid();
+  const double rc = dmax + skin;
+  BinLayout out;
   // Automatic split of large cells: bins near the interaction range, but never (much) more
   // bins than particles: a few spheres in big cells must not allocate split^3 bins per cell.
   const double perCell = static_cast<double>(total) / static_cast<double>(grid.cellCount());
@@ -452,13 +455,10 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
            fmt(skin) + " m)";
   };
   for (int d = 0; d < 3; ++d) {
-    origin[d] = grid.origin[d];
-    L[d] = grid.length[d];
-    periodic[d] = grid.periodic[d];
     const double h = grid.spacing(d);
-    const auto& cuts = dec.cuts()[d];
+    const auto& cd = cuts[d];
     const auto divides = [&](long long k) {
-      return std::all_of(cuts.begin(), cuts.end(), [k](int c) { return c % k == 0; });
+      return std::all_of(cd.begin(), cd.end(), [k](int c) { return c % k == 0; });
     };
     long long multiple = 1, split = 1;
     std::string key;
@@ -487,27 +487,68 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
                                      " m): use larger cells or fewer ranks");
       }
     }
-    bs[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
-    binSplit[d] = split;
-    binMult[d] = split > 1 ? 1 : multiple;
-    if (any && bs[d] < rc)
-      throw ConfigError(key, "the bin edge " + fmt(bs[d]) + " m along " + kAxis[d] +
+    out.size[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
+    out.split[d] = split;
+    out.multiple[d] = split > 1 ? 1 : multiple;
+    if (any && out.size[d] < rc)
+      throw ConfigError(key, "the bin edge " + fmt(out.size[d]) + " m along " + kAxis[d] +
                                  " is smaller than " + range());
-    NbG[d] = split > 1 ? grid.cells[d] * split : grid.cells[d] / multiple;
-    binLo[d] = split > 1 ? dec.lo()[d] * split : dec.lo()[d] / multiple;
-    binHi[d] = split > 1 ? dec.hi()[d] * split : dec.hi()[d] / multiple;
-    if (any && periodic[d] && NbG[d] < 2)
+    out.globalBins[d] = split > 1 ? grid.cells[d] * split : grid.cells[d] / multiple;
+    if (any && grid.periodic[d] && out.globalBins[d] < 2)
       throw ConfigError(key, std::string("a periodic axis needs at least 2 bins (") + kAxis[d] +
-                                 " has " + std::to_string(NbG[d]) +
+                                 " has " + std::to_string(out.globalBins[d]) +
                                  "): the box must be at least "
                                  "twice " +
                                  range());
+  }
+  return out;
+}
+
+void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total) {
+  const auto& grid = dec.grid();
+  const BinLayout b = binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
+  for (int d = 0; d < 3; ++d) {
+    origin[d] = grid.origin[d];
+    L[d] = grid.length[d];
+    periodic[d] = grid.periodic[d];
+    bs[d] = b.size[d];
+    binSplit[d] = b.split[d];
+    binMult[d] = b.multiple[d];
+    NbG[d] = b.globalBins[d];
+    binLo[d] = b.blockBinLo(d, dec.lo()[d]);
+    binHi[d] = b.blockBinLo(d, dec.hi()[d]);
     nb[d] = static_cast<int>(binHi[d] - binLo[d]);
     nbx[d] = nb[d] + 2;
-    lo[d] = origin[d] + static_cast<double>(binLo[d]) * bs[d];
-    hi[d] =
-        binHi[d] == NbG[d] ? origin[d] + L[d] : origin[d] + static_cast<double>(binHi[d]) * bs[d];
+    lo[d] = b.lo(grid, d, binLo[d]);
+    hi[d] = b.hi(grid, d, binHi[d]);
   }
+}
+
+CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid) {
+  const int nMat = static_cast<int>(cfg.at("particles.materials").size());
+  const auto info = detail::inspectSources(cfg, grid, nMat);
+  double rmax = 0;
+  long long total = 0;
+  for (const auto& s : info) {
+    if (s.count > 0) rmax = std::max(rmax, s.rmax);
+    total += s.count;
+  }
+  CaseParticles out;
+  const double dmax = 2 * rmax;
+  out.skin = cfg.number("particles.skin") * dmax;
+  out.dmax = dmax;
+  out.range = dmax + out.skin;
+  out.total = total;
+  Real3 lo = grid.origin, hi{};
+  for (int d = 0; d < 3; ++d) hi[d] = grid.origin[d] + grid.length[d];
+  const auto all = [](const double*) { return true; };
+  std::size_t count = 0;
+  detail::generate(cfg, info, lo, hi, all, [&count](const detail::NewParticle&) { ++count; });
+  for (auto& x : out.x) x.reserve(count);
+  detail::generate(cfg, info, lo, hi, all, [&out](const detail::NewParticle& q) {
+    for (int d = 0; d < 3; ++d) out.x[d].push_back(q.x[d]);
+  });
+  return out;
 }
 
 void DemSolver::Impl::checkTimeStep() {
@@ -1113,7 +1154,10 @@ void DemSolver::Impl::exchange(int d, int tagBase, bool sizesKnown) {
     bytes += static_cast<long long>(sbuf[static_cast<std::size_t>(s)].size() * sizeof(double));
     msgs += sizesKnown ? 1 : 2;
   }
-  if (msgs > 0) timers.book(Exchange::IntraPhysics, bytes, msgs, comm.wtime() - t0);
+  if (msgs > 0)
+    timers.book(Exchange::IntraPhysics, bytes, msgs, comm.wtime() - t0,
+                tagBase >= kTagMigCount && tagBase < kTagMigCount + 30 ? Traffic::DemMigrate
+                                                                        : Traffic::DemGhost);
 }
 
 void DemSolver::Impl::migrate() {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <mpi.h>
+
 #include "coloc/core/error.hpp"
 
 namespace coloc {
@@ -128,6 +130,61 @@ std::vector<double> cellCosts(const Decomposition& dec, std::span<const double> 
         model.perParticle;
   }
   dec.comm().sumInPlace(std::span<double>(cost));
+  for (double& c : cost) c += model.perCell;
+  return cost;
+}
+
+std::vector<double> cellCostsOnRoot(const Decomposition& dec, std::span<const double> x,
+                                    std::span<const double> y, std::span<const double> z,
+                                    const CostModel& model) {
+  const auto& g = dec.grid();
+  const Int3 lo = dec.lo(), n = dec.cells();
+  // Block-local dense part (x fastest), then (global index, value) pairs for cells outside.
+  std::vector<double> local(static_cast<std::size_t>(dec.ownedCellCount()), 0.0);
+  std::vector<double> outside;  // pairs: index as double (exact below 2^53), value
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    const auto c = dec.cellOfPoint({x[p], y[p], z[p]});
+    bool in = true;
+    for (int d = 0; d < 3; ++d) in = in && c[d] >= lo[d] && c[d] < lo[d] + n[d];
+    if (in) {
+      local[static_cast<std::size_t>((c[0] - lo[0]) +
+                                     n[0] * ((c[1] - lo[1]) + n[1] * (c[2] - lo[2])))] +=
+          model.perParticle;
+    } else {
+      outside.push_back(static_cast<double>(c[0] + g.cells[0] * (c[1] + g.cells[1] * c[2])));
+      outside.push_back(model.perParticle);
+    }
+  }
+  local.insert(local.end(), outside.begin(), outside.end());
+  const Comm& comm = dec.comm();
+  const int size = comm.size(), me = comm.rank();
+  int mine = static_cast<int>(local.size());
+  std::vector<int> counts(me == 0 ? static_cast<std::size_t>(size) : 0), displ;
+  MPI_Gather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm.raw());
+  std::vector<double> all;
+  if (me == 0) {
+    const int total = Comm::displacements(counts, displ);
+    all.resize(static_cast<std::size_t>(total));
+  }
+  MPI_Gatherv(local.data(), mine, MPI_DOUBLE, all.data(), counts.data(), displ.data(), MPI_DOUBLE,
+              0, comm.raw());
+  std::vector<double> cost;
+  if (me != 0) return cost;
+  cost.assign(static_cast<std::size_t>(g.cellCount()), 0.0);
+  for (int r = 0; r < size; ++r) {
+    const Int3 rl = dec.loOf(r), rh = dec.hiOf(r);
+    const Int3 rn{rh[0] - rl[0], rh[1] - rl[1], rh[2] - rl[2]};
+    const double* v = all.data() + displ[static_cast<std::size_t>(r)];
+    std::size_t q = 0;
+    for (int k = 0; k < rn[2]; ++k)
+      for (int j = 0; j < rn[1]; ++j)
+        for (int i = 0; i < rn[0]; ++i, ++q)
+          cost[static_cast<std::size_t>((rl[0] + i) +
+                                        g.cells[0] * ((rl[1] + j) + g.cells[1] * (rl[2] + k)))] +=
+              v[q];
+    for (; q + 1 < static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]); q += 2)
+      cost[static_cast<std::size_t>(v[q])] += v[q + 1];
+  }
   for (double& c : cost) c += model.perCell;
   return cost;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include "coloc/core/error.hpp"
@@ -18,9 +19,11 @@ std::vector<int> Decomposition::evenCuts(int n, int p) {
   return c;
 }
 
-Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims) {
+Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims, int minCells) {
   for (int d = 0; d < 3; ++d)
     if (dims[d] < 0) throw ConfigError("partition.dims", "process counts must be >= 0");
+  if (size < 1) throw ConfigError("partition.dims", "the rank count must be at least 1");
+  minCells = std::max(minCells, 1);
   int fixed = 1;
   for (int d = 0; d < 3; ++d)
     if (dims[d] > 0) fixed *= dims[d];
@@ -28,9 +31,17 @@ Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims) {
     throw ConfigError("partition.dims", "the fixed process counts (product " +
                                             std::to_string(fixed) + ") do not divide the " +
                                             std::to_string(size) + " ranks");
-  if (dims[0] == 0 || dims[1] == 0 || dims[2] == 0) {
-    // MPI_Dims_create balances the free counts; the largest count goes to the free axis with
-    // the most cells so blocks stay close to cubes (fewest halo cells).
+  if (dims[0] > 0 && dims[1] > 0 && dims[2] > 0) return dims;  // fully fixed: checked by uniform()
+  // Legal: the even split leaves every block at least minCells cells along every axis.
+  const auto legal = [&](const Int3& c) {
+    for (int d = 0; d < 3; ++d)
+      if (1LL * c[d] * minCells > grid.cells[d]) return false;
+    return true;
+  };
+  // MPI_Dims_create balances the free counts; the largest count goes to the free axis with
+  // the most cells so blocks stay close to cubes (fewest halo cells).
+  Int3 first = dims;
+  {
     std::vector<int> freeAxes;
     for (int d = 0; d < 3; ++d)
       if (dims[d] == 0) freeAxes.push_back(d);
@@ -39,18 +50,51 @@ Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims) {
     std::sort(counts.begin(), counts.end(), std::greater<>());
     std::stable_sort(freeAxes.begin(), freeAxes.end(),
                      [&](int a, int b) { return grid.cells[a] > grid.cells[b]; });
-    for (std::size_t i = 0; i < freeAxes.size(); ++i) dims[freeAxes[i]] = counts[i];
+    for (std::size_t i = 0; i < freeAxes.size(); ++i) first[freeAxes[i]] = counts[i];
   }
-  return dims;
+  if (legal(first)) return first;
+  // That grid makes blocks too thin along an axis: among every factorisation of the rank count
+  // (fixed entries kept) take the legal one with the smallest block surface (halo cells),
+  // ties to the first in (x, y, z) order.
+  Int3 best{0, 0, 0};
+  double bestArea = std::numeric_limits<double>::infinity();
+  for (int px = 1; px <= size; ++px) {
+    if (size % px || (dims[0] > 0 && px != dims[0])) continue;
+    for (int py = 1; py <= size / px; ++py) {
+      if ((size / px) % py || (dims[1] > 0 && py != dims[1])) continue;
+      const int pz = size / px / py;
+      if (dims[2] > 0 && pz != dims[2]) continue;
+      const Int3 c{px, py, pz};
+      if (!legal(c)) continue;
+      const double bx = static_cast<double>(grid.cells[0]) / px,
+                   by = static_cast<double>(grid.cells[1]) / py,
+                   bz = static_cast<double>(grid.cells[2]) / pz;
+      const double area = bx * by + by * bz + bx * bz;
+      if (area < bestArea * (1 - 1e-12)) {
+        bestArea = area;
+        best = c;
+      }
+    }
+  }
+  if (best[0] > 0) return best;
+  throw ConfigError("partition.dims",
+                    "no process grid of " + std::to_string(size) +
+                        " ranks gives every block at least " + std::to_string(minCells) +
+                        " cells along every axis (domain.cells = " +
+                        std::to_string(grid.cells[0]) + " x " + std::to_string(grid.cells[1]) +
+                        " x " + std::to_string(grid.cells[2]) +
+                        (fixed > 1 ? ", partition.dims fixes " + std::to_string(fixed) : "") +
+                        "): use fewer ranks, more cells (domain.cells) or other partition.dims");
 }
 
-Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, Int3 dims) {
+Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, Int3 dims,
+                                     int minCells) {
   const int size = world.size();
   for (int d = 0; d < 3; ++d)
     if (grid.cells[d] < 1)
       throw ConfigError("grid.cells", std::string("the number of cells along ") + kAxis[d] +
                                           " must be at least 1");
-  dims = chooseDims(size, grid, dims);
+  dims = chooseDims(size, grid, dims, minCells);
   int product = dims[0] * dims[1] * dims[2];
   if (product != size)
     throw ConfigError("partition.dims", "process grid " + std::to_string(dims[0]) + "x" +

@@ -93,7 +93,7 @@ long long HaloPlan::bytesPerGather() const {
 }
 
 void HaloPlan::sweep(int d, std::span<Field3<double>* const> fields, bool reverse, Timers* timers,
-                     Exchange kind) {
+                     Exchange kind, Traffic traffic) {
   if (sides_[d][0].peer == MPI_PROC_NULL && sides_[d][1].peer == MPI_PROC_NULL) return;
   const Comm& comm = dec_->comm();
   const double t0 = MPI_Wtime();
@@ -147,7 +147,7 @@ void HaloPlan::sweep(int d, std::span<Field3<double>* const> fields, bool revers
     }
   }
   // Time only where something left the rank: a rank that is its own neighbour copies in memory.
-  if (timers) timers->book(kind, bytes, msgs, msgs > 0 ? MPI_Wtime() - t0 : 0.0);
+  if (timers) timers->book(kind, bytes, msgs, msgs > 0 ? MPI_Wtime() - t0 : 0.0, traffic);
 }
 
 bool HaloPlan::crossesRanks() const {
@@ -183,16 +183,17 @@ void HaloPlan::fold(int d, std::span<Field3<double>* const> fields) {
   }
 }
 
-void HaloPlan::gather(std::span<Field3<double>* const> fields, Timers* timers, Exchange kind) {
+void HaloPlan::gather(std::span<Field3<double>* const> fields, Timers* timers, Exchange kind,
+                      Traffic traffic) {
   ensureBuffers(fields.size());
-  for (int d = 0; d < 3; ++d) sweep(d, fields, /*reverse=*/false, timers, kind);
+  for (int d = 0; d < 3; ++d) sweep(d, fields, /*reverse=*/false, timers, kind, traffic);
 }
 
 void HaloPlan::scatterSum(std::span<Field3<double>* const> fields, Fold f, Timers* timers,
-                          Exchange kind) {
+                          Exchange kind, Traffic traffic) {
   ensureBuffers(fields.size());
   for (int d = 2; d >= 0; --d) {
-    sweep(d, fields, /*reverse=*/true, timers, kind);
+    sweep(d, fields, /*reverse=*/true, timers, kind, traffic);
     if (f != Fold::Mirror) continue;
     // The fold at walls is the kernel's boundary treatment, arithmetic inside the block, not
     // an exchange: booked to the deposition phase.

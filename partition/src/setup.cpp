@@ -1,5 +1,7 @@
 #include "coloc/partition/setup.hpp"
 
+#include "coloc/core/run_config.hpp"
+
 namespace coloc {
 
 void declareDomainConfig(Schema& s) {
@@ -52,11 +54,26 @@ GlobalGrid gridFromConfig(const Config& cfg) {
   return g;
 }
 
+int minBlockCells(const Config& cfg) {
+  // The fluid keeps two ghost layers and needs blocks at least that thick; the DEM alone needs a
+  // cell.
+  return runMode(cfg) == RunMode::ParticlesOnly ? 1 : 2;
+}
+
+Int3 processGridFromConfig(const Config& cfg, int ranks) {
+  const auto d = cfg.intVec3("partition.dims");
+  return Decomposition::chooseDims(
+      ranks, gridFromConfig(cfg),
+      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])},
+      minBlockCells(cfg));
+}
+
 Decomposition decompositionFromConfig(const Comm& world, const Config& cfg) {
   const auto d = cfg.intVec3("partition.dims");
   return Decomposition::uniform(
       world, gridFromConfig(cfg),
-      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])});
+      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])},
+      minBlockCells(cfg));
 }
 
 }  // namespace coloc

@@ -77,3 +77,30 @@ TEST(Balance, CellCostsCountParticlesOnEveryRank) {
   EXPECT_DOUBLE_EQ(c[static_cast<std::size_t>(1 + 48 * (1 + 4 * 1))], 0.5 + 2.0 * n * (n + 1) / 2);
   EXPECT_DOUBLE_EQ(c[0], 0.5);
 }
+
+TEST(Balance, CellCostsOnRootEqualCellCostsWithoutAGlobalCollective) {
+  GlobalGrid g = box();
+  const auto dec = Decomposition::uniform(Comm::world(), g);
+  // Particles inside this rank's block, spread over its cells, and (rank r) r+1 particles in
+  // cell (1,1,1), which lies outside the block of every rank but the first: the sparse path.
+  std::vector<double> x, y, z;
+  const auto lo = dec.blockLo(), hi = dec.blockHi();
+  for (int p = 0; p < 500; ++p) {
+    x.push_back(lo[0] + (hi[0] - lo[0]) * ((p * 37) % 101) / 101.0);
+    y.push_back(lo[1] + (hi[1] - lo[1]) * ((p * 53) % 97) / 97.0);
+    z.push_back(lo[2] + (hi[2] - lo[2]) * ((p * 71) % 89) / 89.0);
+  }
+  for (int p = 0; p <= dec.rank(); ++p) {
+    x.push_back(0.015);
+    y.push_back(0.015);
+    z.push_back(0.015);
+  }
+  const auto all = cellCosts(dec, x, y, z, {0.5, 2.0});
+  const auto root = cellCostsOnRoot(dec, x, y, z, {0.5, 2.0});
+  if (dec.rank() != 0) {
+    EXPECT_TRUE(root.empty());
+    return;
+  }
+  ASSERT_EQ(root.size(), all.size());
+  for (std::size_t c = 0; c < all.size(); ++c) ASSERT_EQ(root[c], all[c]) << "cell " << c;
+}

@@ -94,6 +94,24 @@ enum class Exchange : std::uint8_t { IntraPhysics, InterPhysicsLocal, InterPhysi
 inline constexpr std::array<std::string_view, 3> kExchangeNames = {
     "intra_physics", "inter_physics_local", "inter_physics_remote"};
 
+/// Finer kinds of traffic inside those three, one counter each (exchange_kinds.* in the report):
+/// what `coloc plan` predicts per kind. Auto: the default of the SPEC kind (intra-physics ->
+/// fluid_halo, inter-physics remote -> deposit_sum, inter-physics local -> force_handover).
+enum class Traffic : std::uint8_t {
+  FluidHalo,      // the fluid solver's own halo gathers
+  CouplingHalo,   // the coupling's one-layer gather of eps
+  DemGhost,       // DEM ghost build and ghost updates
+  DemMigrate,     // DEM migration at neighbour rebuilds
+  DepositSum,     // reverse halo sum of the deposited fields
+  Proxy,          // independent strategy: particle rows to the fluid ranks and forces back
+  ForceHandover,  // inter-physics local: bytes that cross between the physics inside a rank
+  Count,
+  Auto = Count
+};
+inline constexpr std::array<std::string_view, 7> kTrafficNames = {
+    "fluid_halo", "coupling_halo", "dem_ghost", "dem_migrate",
+    "deposit_sum", "proxy", "force_handover"};
+
 double threadCpuSeconds();
 
 /// Phases nest exclusively: starting a phase inside another pauses the outer one until the inner
@@ -109,7 +127,10 @@ class Timers {
   /// Adds one interval measured outside start/stop (e.g. across objects' lifetimes).
   void add(Phase p, double wallSeconds, double cpuSeconds);
   /// Book one exchange: bytes and messages sent by this rank, and its time.
-  void book(Exchange kind, long long bytes, long long messages, double seconds = 0.0);
+  void book(Exchange kind, long long bytes, long long messages, double seconds = 0.0,
+            Traffic traffic = Traffic::Auto);
+  long long bytes(Traffic t) const { return traffic_[static_cast<std::size_t>(t)].bytes; }
+  long long messages(Traffic t) const { return traffic_[static_cast<std::size_t>(t)].messages; }
   long long bytes(Exchange kind) const { return ledger_[idx(kind)].bytes; }
   long long messages(Exchange kind) const { return ledger_[idx(kind)].messages; }
   void reset();
@@ -118,7 +139,8 @@ class Timers {
   void beginRun();
 
   /// Collective: timers.<phase>.{min,avg,max,calls,busy_max,busy_avg},
-  /// exchange.<kind>.{bytes,messages,time_s}, fractions.*, load_imbalance.
+  /// exchange.<kind>.{bytes,messages,time_s}, exchange_kinds.<traffic>.{bytes,messages,
+  /// bytes_max,messages_max}, fractions.*, load_imbalance.
   Json report(const Comm& comm, double stepWallSeconds) const;
 
  private:
@@ -136,6 +158,7 @@ class Timers {
   const Slot& slot(Phase p) const { return slots_[idx(p)]; }
   std::array<Slot, static_cast<std::size_t>(Phase::Count)> slots_{};
   std::array<Ledger, static_cast<std::size_t>(Exchange::Count)> ledger_{};
+  std::array<Ledger, static_cast<std::size_t>(Traffic::Count)> traffic_{};
   std::array<Phase, 16> active_{};  // the running phases, innermost last
   int nActive_ = 0;
 };

@@ -62,6 +62,7 @@
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/halo.hpp"
 #include "coloc/partition/output.hpp"
+#include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {
 
@@ -69,12 +70,6 @@ namespace coloc::coupling {
 void declareConfig(Schema& s);
 /// The schema of a whole case file: run, domain, partition, fluid, particles, coupling.
 Schema caseSchema();
-
-/// The cuts the balanced strategy (independent: the DEM's own blocks) places for `size` ranks
-/// from the global cell costs; pure (no communicator), shared by the run and `coloc check`.
-BalancedLayout planBlocks(const Config& cfg, const GlobalGrid& grid,
-                          const std::vector<double>& cost, int size, Int3 uniformDims,
-                          bool independent);
 
 /// The blocks of the two physics chosen by partition.strategy.
 struct Layouts {
@@ -85,6 +80,16 @@ struct Layouts {
   double modelledImbalance = 1.0;  // balanced: max/avg modelled block cost
   double uniformImbalance = 1.0;   // balanced: the same for the uniform blocks
 };
+
+/// The case's constraints on the blocks of `ranks` ranks (partition.dims, partition.dem_dims,
+/// run.mode, particles.bin_cells): what chooseBlocks (partition/strategy.hpp) takes.
+StrategyInput strategyInput(const Config& cfg, int ranks);
+/// chooseBlocks on rank 0, which alone holds `cost` (cellCostsOnRoot; the particles per cell
+/// when `costIsCount`, for the independent strategy), and the result on every rank. Collective;
+/// an error of the root is raised on every rank.
+StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
+                                  const StrategyInput& in, const std::vector<double>& cost,
+                                  bool costIsCount);
 
 class Simulation {
  public:

@@ -9,7 +9,9 @@
 //    coupling still does every exchange.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -62,6 +64,49 @@ struct DemState {
   long long steps = 0, rebuilds = 0;
   DemFlow flow;  // the same on every rank
 };
+
+/// The DEM's bins for blocks with these cuts (the rule every DemSolver applies: particles.bin_cells,
+/// particles.bin_split, or automatic: bins of whole cells holding the interaction range
+/// dmax + skin, or cells split into bins near that range). Throws ConfigError naming the key.
+struct BinLayout {
+  std::array<double, 3> size{};  // bin edge (m)
+  std::array<long long, 3> split{1, 1, 1}, multiple{1, 1, 1}, globalBins{1, 1, 1};
+  /// First global bin of a block starting at cell c.
+  long long blockBinLo(int d, int c) const {
+    return split[d] > 1 ? 1LL * c * split[d] : c / multiple[d];
+  }
+  /// Physical bounds of a block's bins [binLo, binHi) (the last ends exactly at the box face).
+  double lo(const GlobalGrid& g, int d, long long binLo) const {
+    return g.origin[d] + static_cast<double>(binLo) * size[d];
+  }
+  double hi(const GlobalGrid& g, int d, long long binHi) const {
+    return binHi == globalBins[d] ? g.origin[d] + g.length[d]
+                                  : g.origin[d] + static_cast<double>(binHi) * size[d];
+  }
+  /// Global bin of a coordinate, clamped into the box (the DEM's owner rule).
+  long long binOf(const GlobalGrid& g, int d, double x) const {
+    const double s = std::floor((x - g.origin[d]) / size[d]);
+    long long b = !(s > -1e15) ? -(1LL << 50) : !(s < 1e15) ? (1LL << 50) : static_cast<long long>(s);
+    return std::clamp(b, 0LL, globalBins[d] - 1);
+  }
+  /// The cell whose block owns a global bin.
+  int cellOfBin(int d, long long b) const {
+    return static_cast<int>(split[d] > 1 ? b / split[d] : b * multiple[d]);
+  }
+};
+BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
+                    const std::array<std::vector<int>, 3>& cuts, double dmax, double skin,
+                    long long total);
+
+/// Every particle of the case as a run creates it (the same generator and sources, whatever the
+/// rank count), without building a solver: centres only, and the sizes the bins follow. For
+/// `coloc plan`, which partitions them for rank counts it does not run.
+struct CaseParticles {
+  std::array<std::vector<double>, 3> x;
+  double dmax = 0, skin = 0, range = 0;  // largest diameter, skin, interaction range (m)
+  long long total = 0;
+};
+CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid);
 
 class DemSolver {
  public:

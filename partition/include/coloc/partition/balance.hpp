@@ -40,6 +40,14 @@ std::vector<double> cellCosts(const Decomposition& dec, std::span<const double> 
                               std::span<const double> y, std::span<const double> z,
                               const CostModel& model);
 
+/// The same cost, on rank 0 only (empty elsewhere): each rank sends the cells of its own block
+/// (and the few cells outside it where a particle's centre lies) to rank 0, so that no rank but
+/// the root holds or receives anything of the global cell count. Collective (a gather). Equal to
+/// cellCosts() bit for bit where each cell's particles are on one rank.
+std::vector<double> cellCostsOnRoot(const Decomposition& dec, std::span<const double> x,
+                                    std::span<const double> y, std::span<const double> z,
+                                    const CostModel& model);
+
 /// Cost of the largest block and the mean block cost of a layout.
 void evaluateLayout(const GlobalGrid& grid, const std::vector<double>& cost, BalancedLayout& l);
 

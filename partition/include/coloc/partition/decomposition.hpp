@@ -36,14 +36,20 @@ struct GlobalGrid {
 
 class Decomposition {
  public:
-  /// Uniform blocks. `dims` = {0,0,0} lets MPI_Dims_create choose; a non-zero entry fixes that
+  /// Uniform blocks. `dims` = {0,0,0} lets chooseDims choose; a non-zero entry fixes that
   /// axis. Throws ConfigError (key "partition.dims") when the grid cannot hold the blocks.
-  static Decomposition uniform(const Comm& world, const GlobalGrid& grid, Int3 dims = {0, 0, 0});
+  static Decomposition uniform(const Comm& world, const GlobalGrid& grid, Int3 dims = {0, 0, 0},
+                               int minCells = 1);
   /// Blocks from explicit cuts (each axis: 0 = c_0 < c_1 < ... < c_P = N).
   static Decomposition fromCuts(const Comm& world, const GlobalGrid& grid,
                                 std::array<std::vector<int>, 3> cuts);
-  /// The process grid the uniform strategy uses for `size` ranks (non-zero entries are kept).
-  static Int3 chooseDims(int size, const GlobalGrid& grid, Int3 dims = {0, 0, 0});
+  /// The process grid the uniform strategy uses for `size` ranks (non-zero entries are kept):
+  /// MPI_Dims_create's, the largest count on the axis with the most cells, when the even split
+  /// then leaves every block at least `minCells` cells along every axis; otherwise the legal
+  /// factorisation with the smallest block surface. No MPI communication (callable for any
+  /// rank count). Throws ConfigError naming partition.dims and domain.cells when none is legal.
+  static Int3 chooseDims(int size, const GlobalGrid& grid, Int3 dims = {0, 0, 0},
+                         int minCells = 1);
   /// The even split of n cells over p blocks.
   static std::vector<int> evenCuts(int n, int p);
 

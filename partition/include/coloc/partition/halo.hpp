@@ -33,17 +33,18 @@ class HaloPlan {
   const FieldLayout& layout() const { return layout_; }
 
   void gather(std::span<Field3<double>* const> fields, Timers* timers = nullptr,
-              Exchange kind = Exchange::IntraPhysics);
-  void gather(Field3<double>& f, Timers* timers = nullptr, Exchange kind = Exchange::IntraPhysics) {
+              Exchange kind = Exchange::IntraPhysics, Traffic traffic = Traffic::Auto);
+  void gather(Field3<double>& f, Timers* timers = nullptr, Exchange kind = Exchange::IntraPhysics,
+              Traffic traffic = Traffic::Auto) {
     Field3<double>* p = &f;
-    gather(std::span<Field3<double>* const>(&p, 1), timers, kind);
+    gather(std::span<Field3<double>* const>(&p, 1), timers, kind, traffic);
   }
   void scatterSum(std::span<Field3<double>* const> fields, Fold fold, Timers* timers = nullptr,
-                  Exchange kind = Exchange::InterPhysicsRemote);
+                  Exchange kind = Exchange::InterPhysicsRemote, Traffic traffic = Traffic::Auto);
   void scatterSum(Field3<double>& f, Fold fold, Timers* timers = nullptr,
-                  Exchange kind = Exchange::InterPhysicsRemote) {
+                  Exchange kind = Exchange::InterPhysicsRemote, Traffic traffic = Traffic::Auto) {
     Field3<double>* p = &f;
-    scatterSum(std::span<Field3<double>* const>(&p, 1), fold, timers, kind);
+    scatterSum(std::span<Field3<double>* const>(&p, 1), fold, timers, kind, traffic);
   }
 
   /// Bytes this rank sends in one gather of one field (for reports and benchmarks).
@@ -59,7 +60,7 @@ class HaloPlan {
     IndexBox ghost;      // ghost layers beyond this side: received by gather, sent by scatter
   };
   void sweep(int d, std::span<Field3<double>* const> fields, bool reverse, Timers* timers,
-             Exchange kind);
+             Exchange kind, Traffic traffic);
   void fold(int d, std::span<Field3<double>* const> fields);
   void ensureBuffers(std::size_t nFields);
 
