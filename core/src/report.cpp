@@ -1,5 +1,7 @@
 #include "coloc/core/report.hpp"
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -47,28 +49,36 @@ void Report::addMemory(const Comm& comm) {
 void makeDirectories(const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw Error("cannot create directory '" + dir + "': " + ec.message());
+  if (ec) throw IoError("cannot create directory '" + dir + "': " + ec.message());
 }
 
 std::string Report::write(const Comm& comm, const std::string& dir) const {
   const std::string path = (std::filesystem::path(dir) / "report.json").string();
   std::string err;
   if (comm.isRoot()) {
+    // Through report.json.tmp and a rename: a failure (a full disk) never leaves a partial
+    // report.json; the close is checked (the last buffer is written there).
+    const std::string tmp = path + ".tmp";
     try {
       makeDirectories(dir);
-      const std::string tmp = path + ".tmp";
-      {
-        std::ofstream out(tmp);
-        if (!out) throw Error("cannot write '" + tmp + "'");
-        out << json_.dump(2) << "\n";
-        if (!out) throw Error("error writing '" + tmp + "'");
-      }
-      std::filesystem::rename(tmp, path);
+      std::ofstream out(tmp, std::ios::trunc);
+      if (!out) throw IoError("cannot write '" + tmp + "': " + std::strerror(errno));
+      errno = 0;
+      out << json_.dump(2) << "\n";
+      out.close();
+      if (!out)
+        throw IoError("error writing '" + tmp + "'" +
+                      (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
+      std::error_code ec;
+      std::filesystem::rename(tmp, path, ec);
+      if (ec) throw IoError("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
     } catch (const std::exception& e) {
       err = e.what();
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
     }
   }
-  comm.raiseIfAny(err);
+  if (const std::string msg = comm.firstError(err, 4); !msg.empty()) throw IoError(msg);
   return path;
 }
 

@@ -3,6 +3,8 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +14,7 @@
 #include <utility>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/failure.hpp"
 
 static_assert(std::is_same_v<hid_t, std::int64_t>, "H5File::id() assumes a 64-bit hid_t");
 
@@ -61,16 +64,38 @@ void silenceHdf5() {
   (void)done;
 }
 
-/// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ...").
+/// What the failed system call said, for the errors a user can act on (errno of the last call;
+/// set to 0 before the HDF5 call by ioCollective).
+std::string ioReason() {
+  switch (errno) {
+    case ENOSPC:
+    case EDQUOT:
+    case EFBIG:
+    case EROFS:
+    case EACCES:
+    case EIO:
+      return std::string(" (") + std::strerror(errno) + ")";
+    default:
+      return {};
+  }
+}
+
+/// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ..."),
+/// coloc::IoError when `io` (a write: the driver exits with its I/O status).
 template <class F>
-void collective(const Comm& comm, const std::string& context, F&& f) {
+void collective(const Comm& comm, const std::string& context, F&& f, bool io = false) {
   std::string err;
+  errno = 0;
   try {
     f();
   } catch (const std::exception& e) {
     err = context + ": " + e.what();
+    if (io) err += ioReason();
   }
-  comm.raiseIfAny(err);
+  const std::string msg = comm.firstError(err, io ? 4 : 3);
+  if (msg.empty()) return;
+  if (io) throw IoError(msg);
+  throw Error(msg);
 }
 
 // ---- handles ------------------------------------------------------------------------------------
@@ -275,13 +300,13 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
         H5Dclose);
     mspace = selectSlab(fspace, s);
     xfer = collectiveXfer();
-  });
+  }, true);
   // 3. the collective transfer (nothing to move when the global array is empty)
   if (s.globalElements() == 0) return;
   static const double dummy = 0;
   collective(comm, ctx, [&] {
     checkErr(H5Dwrite(dset, memType(e), mspace, fspace, xfer, buf ? buf : &dummy), "H5Dwrite");
-  });
+  }, true);
 }
 
 /// Collective: read this rank's slab of dataset `path`, which must have shape s.global.
@@ -440,7 +465,7 @@ void writeAttribute(H5File& file, const std::string& object, const std::string& 
                      "H5Acreate2"),
              H5Aclose);
     checkErr(H5Awrite(attr, mtype, data), "H5Awrite");
-  });
+  }, true);
 }
 
 /// Open an attribute and call f(attr, type, space) collectively.
@@ -518,7 +543,7 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
     Hid fapl = mpioFapl(flat, true);
     id = H5Fcreate(f.writePath_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
     if (id < 0) throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
-  });
+  }, true);
   f.id_ = id;
   return f;
 }
@@ -572,7 +597,14 @@ H5File::~H5File() {
 
 void H5File::release() noexcept {
   if (id_ < 0) return;
-  H5Fclose(static_cast<hid_t>(id_));
+  {
+    // An error path (the file is discarded): H5Fclose is collective and may not return if a
+    // rank fails inside it (a full disk while flushing the metadata): end every rank rather
+    // than hang (coloc/core/failure.hpp).
+    const FailureDeadline deadline("closing '" + writePath_ + "' to discard it did not complete",
+                                   writable_ ? 4 : 3);
+    H5Fclose(static_cast<hid_t>(id_));
+  }
   id_ = -1;
   if (writable_ && root_) {  // no MPI call here: the communicator may be gone
     std::error_code ec;
@@ -583,15 +615,19 @@ void H5File::release() noexcept {
 void H5File::close() {
   if (id_ < 0) return;
   std::string err;
+  errno = 0;
   if (writable_ && sync_ && H5Fflush(static_cast<hid_t>(id_), H5F_SCOPE_GLOBAL) < 0)
-    err = "H5Fflush failed: " + h5ErrorText();
+    err = "H5Fflush failed: " + h5ErrorText() + ioReason();
+  if (!err.empty()) noteLocalFailure(writePath_ + ": " + err, 4);  // H5Fclose is collective
   if (H5Fclose(static_cast<hid_t>(id_)) < 0 && err.empty())
-    err = "H5Fclose failed: " + h5ErrorText();
+    err = "H5Fclose failed: " + h5ErrorText() + ioReason();
   id_ = -1;
   if (!err.empty()) err = writePath_ + ": " + err;
+  if (!err.empty()) noteLocalFailure(err, 4);
   // Every rank has closed once the reduction returns; rank 0 then publishes the file under its
   // name, or removes it when some rank failed.
   const bool failedSomewhere = comm_.max(err.empty() ? 0 : 1) != 0;
+  if (failedSomewhere) failureShared();
   if (writable_ && comm_.isRoot()) {
     std::error_code ec;
     if (failedSomewhere) {
@@ -601,7 +637,7 @@ void H5File::close() {
       if (ec) err = "cannot rename '" + writePath_ + "' to '" + path_ + "': " + ec.message();
     }
   }
-  comm_.raiseIfAny(err);
+  if (const std::string msg = comm_.firstError(err, 4); !msg.empty()) throw IoError(msg);
 }
 
 void H5File::createGroup(const std::string& path) {
@@ -613,7 +649,7 @@ void H5File::createGroup(const std::string& path) {
     Hid lcpl = parentsLcpl();
     Hid g(checkId(H5Gcreate2(id_, path.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT), "H5Gcreate2"),
           H5Gclose);
-  });
+  }, true);
 }
 
 bool H5File::exists(const std::string& path) const {
@@ -923,9 +959,10 @@ void XdmfSeries::write(const Comm& comm, const std::string& path) const {
     const std::string tmp = path + ".tmp";
     {
       std::ofstream out(tmp, std::ios::trunc);
+      errno = 0;
       out << xml();
       out.flush();
-      if (!out) err = "cannot write '" + tmp + "'";
+      if (!out) err = "cannot write '" + tmp + "'" + ioReason();
     }
     std::error_code ec;
     if (err.empty()) {
@@ -934,7 +971,7 @@ void XdmfSeries::write(const Comm& comm, const std::string& path) const {
     }
     if (!err.empty()) std::filesystem::remove(tmp, ec);
   }
-  comm.raiseIfAny(err);
+  if (const std::string msg = comm.firstError(err, 4); !msg.empty()) throw IoError(msg);
 }
 
 }  // namespace coloc
