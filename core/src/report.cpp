@@ -54,11 +54,12 @@ void makeDirectories(const std::string& dir) {
 
 std::string Report::write(const Comm& comm, const std::string& dir) const {
   const std::string path = (std::filesystem::path(dir) / "report.json").string();
+  const std::string tmp = path + ".tmp";
   std::string err;
   if (comm.isRoot()) {
-    // Through report.json.tmp and a rename: a failure (a full disk) never leaves a partial
-    // report.json; the close is checked (the last buffer is written there).
-    const std::string tmp = path + ".tmp";
+    // Through report.json.tmp, renamed once every rank has agreed: a failure (a full disk, a
+    // rank that fails meanwhile) never leaves a partial or an untrue report.json; the close is
+    // checked (the last buffer is written there).
     try {
       makeDirectories(dir);
       std::ofstream out(tmp, std::ios::trunc);
@@ -69,16 +70,24 @@ std::string Report::write(const Comm& comm, const std::string& dir) const {
       if (!out)
         throw IoError("error writing '" + tmp + "'" +
                       (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
-      std::error_code ec;
-      std::filesystem::rename(tmp, path, ec);
-      if (ec) throw IoError("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
     } catch (const std::exception& e) {
       err = e.what();
+    }
+  }
+  std::string msg = comm.firstError(err, 4);
+  if (msg.empty() && comm.isRoot()) {
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) err = "cannot rename '" + tmp + "' to '" + path + "': " + ec.message();
+  }
+  if (msg.empty()) msg = comm.firstError(err, 4);
+  if (!msg.empty()) {
+    if (comm.isRoot()) {
       std::error_code ec;
       std::filesystem::remove(tmp, ec);
     }
+    throw IoError(msg);
   }
-  if (const std::string msg = comm.firstError(err, 4); !msg.empty()) throw IoError(msg);
   return path;
 }
 

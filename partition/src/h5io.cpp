@@ -1,6 +1,7 @@
 #include "coloc/partition/h5io.hpp"
 
 #include <hdf5.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -80,6 +81,19 @@ std::string ioReason() {
   }
 }
 
+/// After a failed write whose errno says nothing (MPI-IO often keeps it): a nearly full file
+/// system of `file` is named.
+std::string spaceReason(const std::string& file) {
+  struct statvfs st {};
+  const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+  if (::statvfs(dir.empty() ? "." : dir.c_str(), &st) != 0) return {};
+  const unsigned long long avail =
+      static_cast<unsigned long long>(st.f_bavail) * static_cast<unsigned long long>(st.f_frsize);
+  if (avail >= (1ull << 20)) return {};
+  return " (No space left on device: " + std::to_string(avail) + " bytes free on the file system of '" +
+         (dir.empty() ? std::string(".") : dir.string()) + "')";
+}
+
 /// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ..."),
 /// coloc::IoError when `io` (a write: the driver exits with its I/O status).
 template <class F>
@@ -90,7 +104,11 @@ void collective(const Comm& comm, const std::string& context, F&& f, bool io = f
     f();
   } catch (const std::exception& e) {
     err = context + ": " + e.what();
-    if (io) err += ioReason();
+    if (io) {
+      std::string why = ioReason();
+      if (why.empty()) why = spaceReason(context.substr(0, context.find(":/")));
+      err += why;
+    }
   }
   const std::string msg = comm.firstError(err, io ? 4 : 3);
   if (msg.empty()) return;
@@ -601,8 +619,14 @@ void H5File::release() noexcept {
     // An error path (the file is discarded): H5Fclose is collective and may not return if a
     // rank fails inside it (a full disk while flushing the metadata): end every rank rather
     // than hang (coloc/core/failure.hpp).
-    const FailureDeadline deadline("closing '" + writePath_ + "' to discard it did not complete",
+    const FailureDeadline deadline("closing '" + writePath_ + "' after the error did not complete",
                                    writable_ ? 4 : 3);
+    // The file is discarded: empty it first, so that the metadata HDF5 flushes while closing
+    // finds room on a full disk (a rank failing there would leave the others in a barrier).
+    if (writable_ && root_) {
+      std::error_code ec;
+      std::filesystem::resize_file(writePath_, 0, ec);
+    }
     H5Fclose(static_cast<hid_t>(id_));
   }
   id_ = -1;
