@@ -332,16 +332,15 @@ int runCase(const Comm& world, const RunOptions& opts) {
       std::printf(
           "coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
           "set-up %.2f s\n",
-          cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(),
-          dec.dims()[0], dec.dims()[1], dec.dims()[2],
-          static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall);
+          cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(), dec.dims()[0],
+          dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()),
+          particleCount, setupWall);
       if (!opts.restart.empty())
         std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
                     simulation->steps(), simulation->time());
       std::fflush(stdout);
     }
-    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"),
-                     *simulation);
+    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
     series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation);
     output.emplace(simulation->decomposition(), outputOptions);
     simulation->writeOutput(*output);
@@ -438,8 +437,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
         else if (!lastCheckpoint.empty())
           std::fprintf(stderr, "coloc: last good checkpoint: %s\n", lastCheckpoint.c_str());
         if (!saveError.empty())
-          std::fprintf(stderr, "coloc: could not write the failed state: %s\n",
-                       saveError.c_str());
+          std::fprintf(stderr, "coloc: could not write the failed state: %s\n", saveError.c_str());
       }
       writeReport("failed", v.code, std::string(when) + ": " + v.message,
                   saved.empty() ? lastCheckpoint : saved, 0);
@@ -457,8 +455,9 @@ int runCase(const Comm& world, const RunOptions& opts) {
           path = lastCheckpoint;
         }
       }
-      const std::string report = writeReport("interrupted", kInterruptedBase + sig,
-                                             std::string("stopped by ") + signalName(sig), path, sig);
+      const std::string report =
+          writeReport("interrupted", kInterruptedBase + sig,
+                      std::string("stopped by ") + signalName(sig), path, sig);
       if (root) {
         std::fprintf(stderr,
                      "coloc: stopped by %s after step %lld (t = %.9g s); checkpoint: %s; "

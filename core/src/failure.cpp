@@ -87,8 +87,8 @@ Clock::time_point deadlineFromNow(double seconds) {
   MPI_Initialized(&ready);
   if (ready) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (rank > 0) seconds += 1.0;
-  return Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                            std::chrono::duration<double>(seconds));
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 }  // namespace

@@ -93,11 +93,10 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t) : 
     for (std::size_t c = 0; c + 1 < cuts.size(); ++c)
       smallest = std::min(smallest, cuts[c + 1] - cuts[c]);
     if (smallest < kGhost)
-      throw ConfigError("partition.dims", "the fluid needs blocks of at least " +
-                                              std::to_string(kGhost) +
-                                              " cells along every axis; a block has " +
-                                              std::to_string(smallest) + " along axis " +
-                                              std::to_string(a) + ": use fewer ranks along it");
+      throw ConfigError("partition.dims",
+                        "the fluid needs blocks of at least " + std::to_string(kGhost) +
+                            " cells along every axis; a block has " + std::to_string(smallest) +
+                            " along axis " + std::to_string(a) + ": use fewer ranks along it");
   }
   for (int a = 0; a < 3; ++a)
     if (grid.periodic[a] && grid.cells[a] < 3)

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -90,8 +90,9 @@ std::string spaceReason(const std::string& file) {
   const unsigned long long avail =
       static_cast<unsigned long long>(st.f_bavail) * static_cast<unsigned long long>(st.f_frsize);
   if (avail >= (1ull << 20)) return {};
-  return " (No space left on device: " + std::to_string(avail) + " bytes free on the file system of '" +
-         (dir.empty() ? std::string(".") : dir.string()) + "')";
+  return " (No space left on device: " + std::to_string(avail) +
+         " bytes free on the file system of '" + (dir.empty() ? std::string(".") : dir.string()) +
+         "')";
 }
 
 /// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ..."),
@@ -114,6 +115,12 @@ void collective(const Comm& comm, const std::string& context, F&& f, bool io = f
   if (msg.empty()) return;
   if (io) throw IoError(msg);
   throw Error(msg);
+}
+
+/// collective() for a write: its failure is a coloc::IoError.
+template <class F>
+void ioCollective(const Comm& comm, const std::string& context, F&& f) {
+  collective(comm, context, std::forward<F>(f), true);
 }
 
 // ---- handles ------------------------------------------------------------------------------------
@@ -306,7 +313,7 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
   });
   // 2. dataset creation (the same metadata operation on every rank) and selection
   Hid fspace, mspace, dset, xfer;
-  collective(comm, ctx, [&] {
+  ioCollective(comm, ctx, [&] {
     fspace = Hid(checkId(H5Screate_simple(s.rank, s.global.data(), nullptr), "H5Screate_simple"),
                  H5Sclose);
     Hid dcpl = plist(H5P_DATASET_CREATE, "H5Pcreate(dcpl)");
@@ -318,13 +325,13 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
         H5Dclose);
     mspace = selectSlab(fspace, s);
     xfer = collectiveXfer();
-  }, true);
+  });
   // 3. the collective transfer (nothing to move when the global array is empty)
   if (s.globalElements() == 0) return;
   static const double dummy = 0;
-  collective(comm, ctx, [&] {
+  ioCollective(comm, ctx, [&] {
     checkErr(H5Dwrite(dset, memType(e), mspace, fspace, xfer, buf ? buf : &dummy), "H5Dwrite");
-  }, true);
+  });
 }
 
 /// Collective: read this rank's slab of dataset `path`, which must have shape s.global.
@@ -469,7 +476,7 @@ void writeRows(H5File& file, const std::string& path, std::span<const T> local) 
 
 void writeAttribute(H5File& file, const std::string& object, const std::string& name, hid_t ftype,
                     hid_t mtype, hsize_t n, bool scalar, const void* data) {
-  collective(file.comm(), context(file, object) + " attribute '" + name + "'", [&] {
+  ioCollective(file.comm(), context(file, object) + " attribute '" + name + "'", [&] {
     if (!file.writable()) throw LocalFailure("file is open read-only");
     if (!file.exists(object)) throw LocalFailure("no such object");
     Hid obj(checkId(H5Oopen(file.id(), object.c_str(), H5P_DEFAULT), "H5Oopen"), H5Oclose);
@@ -483,7 +490,7 @@ void writeAttribute(H5File& file, const std::string& object, const std::string& 
                      "H5Acreate2"),
              H5Aclose);
     checkErr(H5Awrite(attr, mtype, data), "H5Awrite");
-  }, true);
+  });
 }
 
 /// Open an attribute and call f(attr, type, space) collectively.
@@ -557,11 +564,11 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
   f.root_ = comm.isRoot();
   hid_t id = -1;
   const FlatComm flat(comm.raw());
-  collective(comm, path, [&] {
+  ioCollective(comm, path, [&] {
     Hid fapl = mpioFapl(flat, true);
     id = H5Fcreate(f.writePath_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
     if (id < 0) throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
-  }, true);
+  });
   f.id_ = id;
   return f;
 }
@@ -668,12 +675,12 @@ void H5File::createGroup(const std::string& path) {
   collective(comm_, context(*this, path), [&] {
     if (!writable_) throw LocalFailure("file is open read-only");
   });
-  collective(comm_, context(*this, path), [&] {
+  ioCollective(comm_, context(*this, path), [&] {
     if (exists(path)) return;
     Hid lcpl = parentsLcpl();
     Hid g(checkId(H5Gcreate2(id_, path.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT), "H5Gcreate2"),
           H5Gclose);
-  }, true);
+  });
 }
 
 bool H5File::exists(const std::string& path) const {

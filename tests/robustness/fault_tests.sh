@@ -7,6 +7,7 @@
 #                            every rank stops within seconds, the message is printed once, the
 #                            exit status is CODE, no stale report.json is left (a planted one
 #                            marked ok is gone; a report, if written, says "failed")
+#   blowup                   a blow-up: exit 3, report.json "failed" with the failed state
 #   layout                   blocks of one cell on one rank (issue 15): exit 2, the key named
 #   outfile                  --out under a regular file: exit 4, "Not a directory"
 #   readonly                 --out on a read-only file system (a tmpfs remounted ro): exit 4
@@ -103,6 +104,22 @@ case $test in
     files_good "$work/a" keep-tmp
     run "$coloc" "$work/a" --set run.steps=1
     [[ $rc -eq 0 ]] || { cat "$log"; fail "the next run in the folder failed"; }
+    files_good "$work/a"
+    ;;
+  blowup)
+    # an inlet far too fast: exit 3, report.json "failed" naming the failed state, which exists
+    mkdir -p "$work/a" && echo '{"status": "ok", "stale": true}' > "$work/a/report.json"
+    run "$coloc" "$work/a" "${common[@]}" --set "fluid.boundary.zlo.velocity=[0,0,5]"
+    cat "$log"
+    [[ $rc -eq 3 ]] || fail "exit $rc, expected 3"
+    once "$log" "exceeds fluid.cfl_max"
+    status_is "$work/a/report.json" failed
+    "$py" - "$work/a/report.json" <<'PYEOF' || fail "report.json of the blow-up"
+import json, os, sys
+d = json.load(open(sys.argv[1]))
+assert d["exit_code"] == 3 and "the run failed in step" in d["error"], d
+assert d["checkpoint"].endswith("checkpoint.failed.h5") and os.path.exists(d["checkpoint"]), d
+PYEOF
     files_good "$work/a"
     ;;
   layout)

@@ -16,7 +16,9 @@ void rememberError(const char* what);  // coloc/core/failure.hpp
 
 class Error : public std::runtime_error {
  public:
-  explicit Error(const std::string& what) : std::runtime_error(what) { rememberError(this->what()); }
+  explicit Error(const std::string& what) : std::runtime_error(what) {
+    rememberError(this->what());
+  }
 };
 
 /// A file or directory could not be written (a full disk, no permission, a read-only file
