@@ -118,7 +118,12 @@ class Series {
     }
     comm_.sumInPlace(std::span<double>(row));
     if (!comm_.isRoot() || fd_ < 0 || !error_.empty()) return;
-    fault::point("series", sim.steps());
+    try {
+      fault::point("series", sim.steps());
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      return;
+    }
     char buf[64];
     line_ = std::to_string(sim.steps());
     for (double v : {sim.time(), sim.depositedSolidVolume(), sim.fluidAccelerationL1()}) {
@@ -370,7 +375,6 @@ int runCase(const Comm& world, const RunOptions& opts) {
           simulation->writeOutput(*output);
           where = kSeries;
           series->record(*simulation);
-          if (!series->error().empty()) throw IoError(series->error());
           if (checkpoint.due(simulation->steps())) {
             where = kCheckpoint;
             if (root) series->sync();
@@ -397,6 +401,11 @@ int runCase(const Comm& world, const RunOptions& opts) {
             }
           }
           progress->update(*simulation, cfg.integer("run.steps"), cfg.number("run.end_time"));
+          // Rank 0's series error, after every collective of the step: agreed cleanly.
+          if (root && !series->error().empty()) {
+            where = kSeries;
+            throw IoError(series->error());
+          }
         },
         &where);
     if (v.failed()) {
