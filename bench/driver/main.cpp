@@ -9,7 +9,9 @@
 //
 // Errors in the input are found identically on every rank: rank 0 prints one message naming the
 // key, and every rank exits with status 2. Nothing waits in a collective. A run that fails inside
-// the time loop (a blow-up) exits with status 3 on every rank (bench/driver/run.hpp).
+// the time loop (a blow-up) exits with status 3 on every rank, an output that cannot be written
+// with 4, a run stopped by SIGTERM/SIGINT with 128 + the signal (bench/driver/run.hpp,
+// docs/robustness.md).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
@@ -19,6 +21,7 @@
 #include "coloc/core/error.hpp"
 #include "check.hpp"
 #include "plan.hpp"
+#include "coloc/core/failure.hpp"
 #include "run.hpp"
 
 int main(int argc, char** argv) {
@@ -116,12 +119,34 @@ int main(int argc, char** argv) {
         throw coloc::Error("coloc plan runs in one process: start it without mpirun -n N");
       return coloc::planCase(planOpts);
     }
-    return coloc::runCase(world, opts);
   } catch (const coloc::Error& e) {
+    // keys, check and plan: the same verdict on every rank (check and plan work in one process).
     if (world.isRoot()) std::fprintf(stderr, "coloc: error: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {
     // Not an input error: something only this rank saw. End everyone rather than hang.
     coloc::abortAll(std::string("unexpected exception: ") + e.what());
   }
+  coloc::installStopSignals();
+  // What escapes runCase is an input error found before its phases (the case file): the same
+  // on every rank. Agreed all the same, so that a rank that failed alone cannot hang the others
+  // (it waits run.failure_wait_s at most; coloc/core/failure.hpp).
+  const coloc::FailureChannel channel(world);
+  std::string err;
+  int code = 0;
+  try {
+    return coloc::runCase(world, opts);
+  } catch (const coloc::IoError& e) {
+    err = e.what();
+    code = coloc::kIoErrorStatus;
+  } catch (const coloc::Error& e) {
+    err = e.what();
+    code = coloc::kInputErrorStatus;
+  } catch (const std::exception& e) {
+    err = std::string("unexpected exception: ") + e.what();
+    code = coloc::kRunFailedStatus;
+  }
+  const auto v = channel.agree(err, code);
+  if (world.isRoot()) std::fprintf(stderr, "coloc: error: %s\n", v.message.c_str());
+  return v.code;
 }

@@ -1,15 +1,23 @@
 #include "run.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <optional>
 
 #include "coloc/core/config.hpp"
+#include "coloc/core/error.hpp"
+#include "coloc/core/failure.hpp"
+#include "coloc/core/fault.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/rebalance.hpp"
@@ -66,6 +74,10 @@ class Progress {
 /// output.series_particles / output.series_particle_ids, and the bed diagnostics
 /// (diagnostics.hpp) on the steps of output.diagnostics_interval and the last step (empty fields
 /// in the other rows).
+/// Rank 0 writes the header to series.csv.tmp and renames it (an old series.csv is replaced whole), then
+/// appends each row with one write(); a row that cannot be written whole is cut off again
+/// (ftruncate), so the file holds whole rows only, and the error waits in error() for the step's
+/// agreement (no extra collective).
 class Series {
  public:
   Series(const Comm& comm, const std::string& path, coupling::Simulation& sim, const Config& cfg)
@@ -94,14 +106,31 @@ class Series {
     diagEvery_ = cfg.integer("output.diagnostics_interval");
     if (diagEvery_ == 0) diagEvery_ = cfg.integer("output.interval_steps");
     if (!comm_.isRoot()) return;
-    out_.open(path);
-    out_ << "step,time,solid_volume,fluid_accel_l1";
+    path_ = path;
+    std::string header = "step,time,solid_volume,fluid_accel_l1";
     for (long long id : ids_)
       for (const char* q : {"x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz"})
-        out_ << ",p" << id << "_" << q;
-    for (const auto& c : bedDiagnosticsColumns()) out_ << "," << c;
-    out_ << "\n";
+        header += ",p" + std::to_string(id) + "_" + q;
+    for (const auto& c : bedDiagnosticsColumns()) header += "," + c;
+    header += "\n";
+    line_.reserve(32 * (4 + 9 * ids_.size() + bedDiagnosticsColumns().size()));
+    const std::string tmp = path + ".tmp";
+    fd_ = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw IoError("cannot create '" + tmp + "': " + std::strerror(errno));
+    if (!append(header) || ::rename(tmp.c_str(), path.c_str()) != 0) {
+      const std::string why = std::strerror(errno);
+      ::close(fd_);
+      fd_ = -1;
+      ::unlink(tmp.c_str());
+      throw IoError("cannot write '" + path + "': " + why);
+    }
   }
+  ~Series() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  Series(const Series&) = delete;
+  Series& operator=(const Series&) = delete;
+
   /// One row; the diagnostics when due or at the end of the run. Returns them when computed.
   std::optional<BedDiagnostics> record(coupling::Simulation& sim) {
     std::vector<double> row(9 * ids_.size(), 0.0);
@@ -122,39 +151,70 @@ class Series {
     std::optional<BedDiagnostics> diag;
     if ((diagEvery_ > 0 && sim.steps() % diagEvery_ == 0) || sim.finished())
       diag = bedDiagnostics(sim, cfg_);
-    if (!comm_.isRoot()) return diag;
+    if (!comm_.isRoot() || fd_ < 0 || !error_.empty()) return diag;
+    try {
+      fault::point("series", sim.steps());
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      return diag;
+    }
     char buf[64];
-    out_ << sim.steps();
+    line_ = std::to_string(sim.steps());
     for (double v : {sim.time(), sim.depositedSolidVolume(), sim.fluidAccelerationL1()}) {
       std::snprintf(buf, sizeof buf, ",%.17g", v);
-      out_ << buf;
+      line_ += buf;
     }
     for (double v : row) {
       std::snprintf(buf, sizeof buf, ",%.17g", v);
-      out_ << buf;
+      line_ += buf;
     }
     if (diag) {
       for (double v : bedDiagnosticsRow(*diag)) {
         std::snprintf(buf, sizeof buf, ",%.17g", v);
-        out_ << buf;
+        line_ += buf;
       }
     } else {
-      out_ << std::string(bedDiagnosticsColumns().size(), ',');
+      line_ += std::string(bedDiagnosticsColumns().size(), ',');
     }
-    out_ << "\n";
+    line_ += "\n";
+    if (!append(line_))
+      error_ = "cannot append to '" + path_ + "': " + std::strerror(errno) +
+               " (the rows before this step are kept)";
     return diag;
   }
-  void flush() {
-    if (out_.is_open()) out_.flush();
+  /// Rank 0: the write error of the last record(), if any (then the series stops growing).
+  const std::string& error() const { return error_; }
+  /// Rank 0: to stable storage (with each checkpoint, at the end).
+  void sync() {
+    if (fd_ >= 0) ::fsync(fd_);
   }
 
  private:
+  /// One write() of the whole text; on a short or failed write the file is cut back.
+  bool append(const std::string& text) {
+    const off_t before = ::lseek(fd_, 0, SEEK_END);
+    std::size_t done = 0;
+    while (done < text.size()) {
+      const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        const int e = n == 0 ? ENOSPC : errno;
+        if (before >= 0 && ::ftruncate(fd_, before) != 0) {
+        }
+        errno = e;
+        return false;
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    return true;
+  }
   const Comm& comm_;
   const Config& cfg_;
   std::vector<long long> ids_;
   std::map<long long, std::size_t> column_;
   long long diagEvery_ = 0;
-  std::ofstream out_;
+  int fd_ = -1;
+  std::string path_, line_, error_;
 };
 
 /// output.snapshot: rank 0 runs bench/scripts/snapshot.py on the run's output (a picture of the
@@ -184,6 +244,79 @@ void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet) {
                  script.string().c_str(), rc);
 }
 
+/// Rank 0, before anything is written: what a previous run left that would not tell the truth
+/// about this one: its report.json and series.csv, and the .tmp files of writes it did not finish
+/// (checkpoints, output, report). Checkpoints and field output are kept.
+void removeStaleFiles(const std::string& outDir, const OutputOptions& out,
+                      const CheckpointOptions& ck) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::remove(fs::path(outDir) / "report.json", ec);
+  fs::remove(fs::path(outDir) / "series.csv", ec);
+  std::vector<fs::path> dirs{outDir, out.dir, fs::path(ck.path).parent_path()};
+  for (const auto& dir : dirs) {
+    if (dir.empty() || !fs::is_directory(dir, ec)) continue;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+      const std::string name = entry.path().filename().string();
+      const auto endsWith = [&](const char* tail) {
+        const std::string t = tail;
+        return name.size() >= t.size() && name.compare(name.size() - t.size(), t.size(), t) == 0;
+      };
+      if (endsWith(".h5.tmp") || endsWith(".xmf.tmp") || endsWith(".json.tmp") ||
+          endsWith(".csv.tmp") || name == "rebalance.tmp.h5")
+        fs::remove(entry.path(), ec);
+    }
+  }
+}
+
+/// The stop signal received so far (0: none); set by the handler installStopSignals() puts in.
+volatile std::sig_atomic_t stopSignal = 0;
+
+extern "C" void onStopSignal(int sig) {
+  if (stopSignal != 0) {  // the second: at once (async-signal-safe calls only)
+    static const char msg[] = "coloc: second stop signal: exiting now, without a checkpoint\n";
+    const ssize_t n = ::write(2, msg, sizeof msg - 1);
+    (void)n;
+    std::_Exit(kInterruptedBase + sig);
+  }
+  stopSignal = sig;
+}
+
+const char* signalName(int sig) {
+  switch (sig) {
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGINT:
+      return "SIGINT";
+    default:
+      return "a signal";
+  }
+}
+
+/// Runs `f` on every rank and agrees on the outcome at its end (coloc/core/failure.hpp): the
+/// exit status by the error's type (IoError: kIoErrorStatus, other coloc::Error: `errorCode`,
+/// anything else: kRunFailedStatus), the message of the lowest failing rank, and `where`, a
+/// number the caller gives the part of the phase that was running (set through the pointer).
+template <class F>
+FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& f,
+                              int* where = nullptr) {
+  std::string err;
+  int code = 0;
+  try {
+    f();
+  } catch (const IoError& e) {
+    err = e.what();
+    code = kIoErrorStatus;
+  } catch (const Error& e) {
+    err = e.what();
+    code = errorCode;
+  } catch (const std::exception& e) {
+    err = std::string("unexpected exception: ") + e.what();
+    code = kRunFailedStatus;
+  }
+  return channel.agree(err, code, static_cast<int>(stopSignal), where ? *where : 0);
+}
+
 }  // namespace
 
 std::string describeKeys() {
@@ -191,134 +324,277 @@ std::string describeKeys() {
          coupling::caseSchema().describe();
 }
 
+void installStopSignals() {
+  struct sigaction a {};
+  a.sa_handler = onStopSignal;
+  sigemptyset(&a.sa_mask);
+  a.sa_flags = SA_RESTART;
+  sigaction(SIGTERM, &a, nullptr);
+  sigaction(SIGINT, &a, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);  // a write past RLIMIT_FSIZE fails with EFBIG: an I/O error
+}
+
 int runCase(const Comm& world, const RunOptions& opts) {
   const double t0 = MPI_Wtime();
+  // Phase agreements go through a communicator of their own (coloc/core/failure.hpp).
+  const FailureChannel channel(world);
   const Config cfg = Config::load(world, opts.casePath, opts.overrides, coupling::caseSchema());
   // Whole-case checks and the memory estimate, before anything large is allocated.
   const std::vector<std::string> notes = coupling::checkCase(cfg);
   coupling::checkMemory(world, cfg);
   if (world.isRoot())
     for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
+  setFailureWait(cfg.number("run.failure_wait_s"));
   const std::string outDir = opts.outDir.empty()
                                  ? (std::filesystem::path("out") / cfg.string("name")).string()
                                  : opts.outDir;
-  if (world.isRoot()) makeDirectories(outDir);
   const CheckpointOptions checkpoint = checkpointOptionsFromConfig(cfg, outDir);
-  std::unique_ptr<coupling::Simulation> simulation;
-  if (opts.restart.empty())
-    simulation = std::make_unique<coupling::Simulation>(world, cfg);
-  else
-    simulation = std::make_unique<coupling::Simulation>(
-        cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
-  const double setupWall = MPI_Wtime() - t0;
-  const long long particleCount =
-      simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
-  if (world.isRoot() && !opts.quiet) {
-    const auto& dec = simulation->decomposition();
-    std::printf(
-        "coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
-        "set-up %.2f s\n",
-        cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(), dec.dims()[0],
-        dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()), particleCount,
-        setupWall);
-    if (!opts.restart.empty())
-      std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
-                  simulation->steps(), simulation->time());
+  const OutputOptions outputOptions = outputOptionsFromConfig(cfg, outDir);
+  const bool root = world.isRoot();
+  const auto say = [&](const FailureChannel::Verdict& v, const std::string& before) {
+    if (root) std::fprintf(stderr, "coloc: error: %s%s\n", before.c_str(), v.message.c_str());
+  };
+
+  // 1. The output folder (rank 0), and what a previous run left there that would mislead.
+  auto v = phase(channel, kIoErrorStatus, [&] {
+    if (!root) return;
+    makeDirectories(outDir);
+    removeStaleFiles(outDir, outputOptions, checkpoint);
+    fault::point("outdir", 0);
+  });
+  if (v.failed()) {
+    say(v, "");
+    return v.code;
   }
-  Progress progress(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
-  Series series(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation, cfg);
-  std::optional<BedDiagnostics> lastDiagnostics;
-  OutputWriter output(simulation->decomposition(), outputOptionsFromConfig(cfg, outDir));
-  simulation->writeOutput(output);
-  simulation->beginRun();
-  const double tLoop = MPI_Wtime();
+
+  // What report.json says of the run, however it ends (collective; a failure to write it is
+  // printed, the exit status stays that of the run).
+  std::unique_ptr<coupling::Simulation> simulation;
   long long rebalances = 0;
-  try {
-    while (!simulation->finished()) {
-      simulation->step();
-      simulation->writeOutput(output);
-      if (auto d = series.record(*simulation)) lastDiagnostics = std::move(d);
-      if (checkpoint.due(simulation->steps()))
-        simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
-      if (coupling::rebalanceDue(cfg, simulation->steps())) {
-        const auto plan = coupling::planRebalance(*simulation, cfg);
-        if (plan.layouts) {
-          simulation = coupling::applyRebalance(
-              std::move(simulation), cfg, *plan.layouts,
-              (std::filesystem::path(outDir) / "rebalance.tmp.h5").string());
-          output.rebind(simulation->decomposition());
-          ++rebalances;
-          if (world.isRoot() && !opts.quiet) {
-            const auto& d = simulation->decomposition().dims();
-            std::printf("coloc: step %lld: re-balanced onto %dx%dx%d blocks, modelled imbalance "
-                        "%.3f -> %.3f\n",
-                        simulation->steps(), d[0], d[1], d[2], plan.currentImbalance,
-                        plan.newImbalance);
+  double setupWall = 0, tLoop = 0;
+  Json written;  // the last report written
+  std::optional<BedDiagnostics> lastDiagnostics;  // of the last series row that had them
+  const auto writeReport = [&](const char* status, int code, const std::string& error,
+                               const std::string& state, int sig) -> std::string {
+    std::string path;
+    const auto r = phase(channel, kIoErrorStatus, [&] {
+      Report report(opts.casePath, cfg.json());
+      if (simulation) report.merge(simulation->report(tLoop > 0 ? MPI_Wtime() - tLoop : 0.0));
+      report.set("status", status);
+      report.set("exit_code", code);
+      if (!error.empty()) report.set("error", error);
+      if (!state.empty()) report.set("checkpoint", state);
+      if (sig != 0) report.set("signal", signalName(sig));
+      report.set("run.setup_s", world.max(setupWall));
+      report.set("partition.rebalances", rebalances);
+      report.set("run.notes", notes);
+      // The bed as it ends: computed now at a good end, the last computed otherwise.
+      if (lastDiagnostics)
+        report.set("bed", bedDiagnosticsJson(*lastDiagnostics));
+      else if (simulation && code == 0)
+        report.set("bed", bedDiagnosticsJson(bedDiagnostics(*simulation, cfg)));
+      report.set("run.total_wall_s", world.max(MPI_Wtime() - t0));
+      report.addMemory(world);
+      fault::point("report", simulation ? simulation->steps() : 0);
+      path = report.write(world, outDir);
+      written = report.json();
+    });
+    if (r.failed() && root)
+      std::fprintf(stderr, "coloc: error: could not write the report: %s\n", r.message.c_str());
+    return r.failed() ? std::string() : path;
+  };
+
+  // 2. Set-up: the physics, the series, the output of step 0.
+  std::optional<Progress> progress;
+  std::optional<Series> series;
+  std::optional<OutputWriter> output;
+  v = phase(channel, kInputErrorStatus, [&] {
+    if (opts.restart.empty())
+      simulation = std::make_unique<coupling::Simulation>(world, cfg);
+    else
+      simulation = std::make_unique<coupling::Simulation>(
+          cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
+    setupWall = MPI_Wtime() - t0;
+    const long long particleCount =
+        simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
+    if (root && !opts.quiet) {
+      const auto& dec = simulation->decomposition();
+      std::printf(
+          "coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
+          "set-up %.2f s\n",
+          cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(), dec.dims()[0],
+          dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()),
+          particleCount, setupWall);
+      if (!opts.restart.empty())
+        std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
+                    simulation->steps(), simulation->time());
+      std::fflush(stdout);
+    }
+    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
+    series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
+                   cfg);
+    output.emplace(simulation->decomposition(), outputOptions);
+    simulation->writeOutput(*output);
+  });
+  if (v.failed()) {
+    say(v, "");
+    writeReport("failed", v.code, v.message, "", 0);
+    return v.code;
+  }
+
+  // 3. The time loop: one agreement per step, after the step and its output, series,
+  // checkpoint and re-balance; it carries the stop signals too.
+  enum Part { kStep = 0, kOutput, kSeries, kCheckpoint, kRebalance };
+  static const char* const kPartName[] = {"the step", "writing the output", "writing series.csv",
+                                          "writing the checkpoint", "re-balancing"};
+  simulation->beginRun();
+  tLoop = MPI_Wtime();
+  std::string lastCheckpoint;
+  while (!simulation->finished()) {
+    int where = kStep;
+    v = phase(
+        channel, kRunFailedStatus,
+        [&] {
+          where = kStep;
+          simulation->step();
+          where = kOutput;
+          simulation->writeOutput(*output);
+          where = kSeries;
+          if (auto d = series->record(*simulation)) lastDiagnostics = std::move(d);
+          if (checkpoint.due(simulation->steps())) {
+            where = kCheckpoint;
+            if (root) series->sync();
+            simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
+            lastCheckpoint = checkpoint.pathAt(simulation->steps());
           }
+          if (coupling::rebalanceDue(cfg, simulation->steps())) {
+            where = kRebalance;
+            const auto plan = coupling::planRebalance(*simulation, cfg);
+            if (plan.layouts) {
+              simulation = coupling::applyRebalance(
+                  std::move(simulation), cfg, *plan.layouts,
+                  (std::filesystem::path(outDir) / "rebalance.tmp.h5").string());
+              output->rebind(simulation->decomposition());
+              ++rebalances;
+              if (root && !opts.quiet) {
+                const auto& d = simulation->decomposition().dims();
+                std::printf(
+                    "coloc: step %lld: re-balanced onto %dx%dx%d blocks, modelled imbalance "
+                    "%.3f -> %.3f\n",
+                    simulation->steps(), d[0], d[1], d[2], plan.currentImbalance,
+                    plan.newImbalance);
+              }
+            }
+          }
+          progress->update(*simulation, cfg.integer("run.steps"), cfg.number("run.end_time"));
+          // Rank 0's series error, after every collective of the step: agreed cleanly.
+          if (root && !series->error().empty()) {
+            where = kSeries;
+            throw IoError(series->error());
+          }
+        },
+        &where);
+    if (v.failed()) {
+      if (!simulation) {  // failed while moving onto new blocks: no state left in memory
+        say(v, "re-balancing failed: ");
+        writeReport("failed", v.code, "re-balancing failed: " + v.message, "", 0);
+        return v.code;
+      }
+      char when[200];
+      if (v.where == kStep)
+        std::snprintf(when, sizeof when, "the run failed in step %lld (from t = %.9g s)",
+                      simulation->steps() + 1, simulation->time());
+      else
+        std::snprintf(when, sizeof when, "the run failed after step %lld (t = %.9g s), %s",
+                      simulation->steps(), simulation->time(),
+                      kPartName[std::clamp(v.where, 0, 4)]);
+      // The state at a failure of the physics is kept for inspection (marked failed, not
+      // restartable); after an I/O failure nothing more is written but the report.
+      std::string saved, saveError;
+      if (checkpoint.onFailure && v.code == kRunFailedStatus) {
+        const std::string path = failedCheckpointPath(checkpoint.pathAt(simulation->steps() + 1));
+        const auto w = phase(channel, kRunFailedStatus, [&] {
+          simulation->writeCheckpoint(path, "failed: " + std::string(when) + ": " + v.message);
+        });
+        if (w.failed())
+          saveError = w.message;
+        else
+          saved = path;
+      }
+      if (root) {
+        std::fprintf(stderr, "coloc: error: %s: %s\n", when, v.message.c_str());
+        if (!saved.empty())
+          std::fprintf(stderr,
+                       "coloc: the state at the failure is in %s (status 'failed'; not "
+                       "restartable)%s%s\n",
+                       saved.c_str(), lastCheckpoint.empty() ? "" : "; last good checkpoint: ",
+                       lastCheckpoint.c_str());
+        else if (!lastCheckpoint.empty())
+          std::fprintf(stderr, "coloc: last good checkpoint: %s\n", lastCheckpoint.c_str());
+        if (!saveError.empty())
+          std::fprintf(stderr, "coloc: could not write the failed state: %s\n", saveError.c_str());
+      }
+      writeReport("failed", v.code, std::string(when) + ": " + v.message,
+                  saved.empty() ? lastCheckpoint : saved, 0);
+      return v.code;
+    }
+    if (v.signal != 0 && !simulation->finished()) {
+      // Stopped (a batch system's wall-time limit): every rank after the same step.
+      const int sig = v.signal;
+      std::string path = checkpoint.pathAt(simulation->steps());
+      std::string saveError;
+      if (!checkpoint.due(simulation->steps())) {
+        const auto w = phase(channel, kIoErrorStatus, [&] { simulation->writeCheckpoint(path); });
+        if (w.failed()) {
+          saveError = w.message;
+          path = lastCheckpoint;
         }
       }
-      progress.update(*simulation, cfg.integer("run.steps"), cfg.number("run.end_time"));
-    }
-    // The final state, unless the last step wrote it already.
-    if (checkpoint.intervalSteps > 0 && !checkpoint.due(simulation->steps()))
-      simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
-  } catch (const Error& e) {
-    // A failure inside the time loop reaches every rank here together (the solvers raise their
-    // checks collectively). Keep the state for inspection, say what happened, exit non-zero.
-    if (!simulation) {  // failed while moving onto new blocks: no state left in memory
-      if (world.isRoot()) std::fprintf(stderr, "coloc: error: re-balancing failed: %s\n", e.what());
-      return kRunFailedStatus;
-    }
-    char when[160];
-    std::snprintf(when, sizeof when, "the run failed in step %lld (from t = %.9g s)",
-                  simulation->steps() + 1, simulation->time());
-    const std::string message = e.what();
-    std::string saved, saveError;
-    if (checkpoint.onFailure) {
-      const std::string path = failedCheckpointPath(checkpoint.pathAt(simulation->steps() + 1));
-      try {
-        simulation->writeCheckpoint(path, "failed: " + std::string(when) + ": " + message);
-        saved = path;
-      } catch (const Error& e2) {
-        saveError = e2.what();
-      }
-    }
-    series.flush();
-    if (world.isRoot()) {
-      std::fprintf(stderr, "coloc: error: %s: %s\n", when, message.c_str());
-      if (!saved.empty())
+      const std::string report =
+          writeReport("interrupted", kInterruptedBase + sig,
+                      std::string("stopped by ") + signalName(sig), path, sig);
+      if (root) {
         std::fprintf(stderr,
-                     "coloc: the state at the failure is in %s (status 'failed'; not "
-                     "restartable)%s%s\n",
-                     saved.c_str(), checkpoint.intervalSteps > 0 ? "; last good checkpoint: " : "",
-                     checkpoint.intervalSteps > 0 ? checkpoint.path.c_str() : "");
-      if (!saveError.empty())
-        std::fprintf(stderr, "coloc: could not write the failed state: %s\n", saveError.c_str());
+                     "coloc: stopped by %s after step %lld (t = %.9g s); checkpoint: %s; "
+                     "report: %s; exit status %d\n",
+                     signalName(sig), simulation->steps(), simulation->time(),
+                     path.empty() ? "none" : path.c_str(), report.empty() ? "none" : report.c_str(),
+                     kInterruptedBase + sig);
+        if (!saveError.empty())
+          std::fprintf(stderr, "coloc: error: could not write the final checkpoint: %s\n",
+                       saveError.c_str());
+      }
+      return kInterruptedBase + sig;
     }
-    return kRunFailedStatus;
   }
-  const double loopWall = MPI_Wtime() - tLoop;
 
-  Report report(opts.casePath, cfg.json());
-  report.merge(simulation->report(loopWall));
-  report.set("run.setup_s", world.max(setupWall));
-  report.set("partition.rebalances", rebalances);
-  report.set("run.notes", notes);
-  report.set("bed", bedDiagnosticsJson(lastDiagnostics ? *lastDiagnostics
-                                                       : bedDiagnostics(*simulation, cfg)));
-  report.set("run.total_wall_s", world.max(MPI_Wtime() - t0));
-  report.addMemory(world);
-  const std::string path = report.write(world, outDir);
-  if (world.isRoot()) {
-    const auto& j = report.json();
-    std::printf(
-        "coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
-        "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
-        j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
-        j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
-        j["throughput"]["cell_steps_per_s"].get<double>(),
-        j["throughput"]["particle_steps_per_s"].get<double>(),
-        100.0 * j["fractions"]["inter_physics"].get<double>());
+  // 4. The final state, unless the last step wrote it already; then the report.
+  if (checkpoint.intervalSteps > 0 && !checkpoint.due(simulation->steps())) {
+    const std::string path = checkpoint.pathAt(simulation->steps());
+    v = phase(channel, kIoErrorStatus, [&] { simulation->writeCheckpoint(path); });
+    if (v.failed()) {
+      say(v, "writing the final checkpoint: ");
+      writeReport("failed", v.code, "writing the final checkpoint: " + v.message, lastCheckpoint,
+                  0);
+      return v.code;
+    }
+    lastCheckpoint = path;
+  }
+  if (root) series->sync();
+  const std::string path = writeReport("ok", 0, "", lastCheckpoint, 0);
+  if (path.empty()) return kIoErrorStatus;
+  if (root) {
+    const Json& j = written;
+    {
+      std::printf(
+          "coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
+          "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
+          j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
+          j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
+          j["throughput"]["cell_steps_per_s"].get<double>(),
+          j["throughput"]["particle_steps_per_s"].get<double>(),
+          100.0 * j["fractions"]["inter_physics"].get<double>());
+    }
     std::printf("coloc: report written to %s\n", path.c_str());
   }
   if (world.isRoot()) drawSnapshot(cfg, outDir, opts.quiet);

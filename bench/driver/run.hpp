@@ -19,12 +19,25 @@ struct RunOptions {
   std::string restart;  // --restart FILE: continue from this checkpoint
 };
 
-/// Exit status of a run that failed inside the time loop (blow-up: NaN, CFL, DEM checks).
+// Exit status of `coloc run`, the same on every rank (docs/robustness.md):
+/// Bad input: the case file, the command line, a --restart file, a set-up the ranks cannot take.
+inline constexpr int kInputErrorStatus = 2;
+/// The run failed inside the time loop (blow-up: NaN, CFL, DEM checks), or an internal error.
 inline constexpr int kRunFailedStatus = 3;
+/// A file or folder could not be written (full disk, permissions, read-only, size limit).
+inline constexpr int kIoErrorStatus = 4;
+/// Stopped by SIGINT or SIGTERM after the final checkpoint and report: 128 + the signal
+/// (130 for SIGINT, 143 for SIGTERM).
+inline constexpr int kInterruptedBase = 128;
 
-/// Returns the process exit status (0, or kRunFailedStatus when the time loop failed: the message
-/// is printed on rank 0 and the state at the failure written as a checkpoint marked failed);
-/// throws coloc::Error (on every rank) for bad input, including a bad --restart file.
+/// SIGTERM/SIGINT ask the run to stop after the current step (a second one exits at once);
+/// SIGXFSZ is ignored (a file-size limit is an I/O error). Called by main() for `coloc run`.
+void installStopSignals();
+
+/// Returns the process exit status (above). Every failure is agreed by every rank at the end of
+/// the phase it happened in and printed once by rank 0; DIR/report.json then says how the run
+/// ended. Throws coloc::Error (on every rank) for an input error found before the output folder
+/// is known (the case file or the command line).
 int runCase(const Comm& world, const RunOptions& opts);
 /// The schema of the whole case file, described for `coloc keys`.
 std::string describeKeys();

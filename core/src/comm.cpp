@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/failure.hpp"
 
 namespace coloc {
 
@@ -53,14 +54,23 @@ std::string Comm::broadcast(std::string s, int root) const {
   return s;
 }
 
-void Comm::raiseIfAny(const std::string& localError) const {
+std::string Comm::firstError(const std::string& localError, int exitCode) const {
   const int me = rank();
+  // A rank that failed arms the deadline (coloc/core/failure.hpp) before it waits for the
+  // others here: if they never come (stuck in another collective), it ends every rank.
+  if (!localError.empty()) noteLocalFailure(localError, exitCode);
   const int failing = localError.empty() ? size() : me;
   const int first = min(failing);
-  if (first == size()) return;
+  if (first == size()) return {};
   std::string msg = broadcast(first == me ? localError : std::string(), first);
+  failureShared();
   if (size() > 1) msg = "rank " + std::to_string(first) + ": " + msg;
-  throw Error(msg);
+  return msg;
+}
+
+void Comm::raiseIfAny(const std::string& localError) const {
+  std::string msg = firstError(localError);
+  if (!msg.empty()) throw Error(msg);
 }
 
 void Comm::alltoall(const std::vector<int>& sendCounts, std::vector<int>& recvCounts) const {

@@ -1,5 +1,7 @@
 #include "coloc/core/report.hpp"
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -47,28 +49,45 @@ void Report::addMemory(const Comm& comm) {
 void makeDirectories(const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw Error("cannot create directory '" + dir + "': " + ec.message());
+  if (ec) throw IoError("cannot create directory '" + dir + "': " + ec.message());
 }
 
 std::string Report::write(const Comm& comm, const std::string& dir) const {
   const std::string path = (std::filesystem::path(dir) / "report.json").string();
+  const std::string tmp = path + ".tmp";
   std::string err;
   if (comm.isRoot()) {
+    // Through report.json.tmp, renamed once every rank has agreed: a failure (a full disk, a
+    // rank that fails meanwhile) never leaves a partial or an untrue report.json; the close is
+    // checked (the last buffer is written there).
     try {
       makeDirectories(dir);
-      const std::string tmp = path + ".tmp";
-      {
-        std::ofstream out(tmp);
-        if (!out) throw Error("cannot write '" + tmp + "'");
-        out << json_.dump(2) << "\n";
-        if (!out) throw Error("error writing '" + tmp + "'");
-      }
-      std::filesystem::rename(tmp, path);
+      std::ofstream out(tmp, std::ios::trunc);
+      if (!out) throw IoError("cannot write '" + tmp + "': " + std::strerror(errno));
+      errno = 0;
+      out << json_.dump(2) << "\n";
+      out.close();
+      if (!out)
+        throw IoError("error writing '" + tmp + "'" +
+                      (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
     } catch (const std::exception& e) {
       err = e.what();
     }
   }
-  comm.raiseIfAny(err);
+  std::string msg = comm.firstError(err, 4);
+  if (msg.empty() && comm.isRoot()) {
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) err = "cannot rename '" + tmp + "' to '" + path + "': " + ec.message();
+  }
+  if (msg.empty()) msg = comm.firstError(err, 4);
+  if (!msg.empty()) {
+    if (comm.isRoot()) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+    }
+    throw IoError(msg);
+  }
   return path;
 }
 

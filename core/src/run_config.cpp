@@ -25,6 +25,11 @@ void declareRunConfig(Schema& s) {
            Range::nonNegative());
   s.number("run.progress_interval_s", 2.0, "seconds between progress lines on rank 0 (0: off)",
            Range::nonNegative());
+  s.number("run.failure_wait_s", 10.0,
+           "seconds a rank that failed alone waits for the others to learn of it at the next "
+           "error check; past it, it prints its message and stops every rank (MPI_Abort), so "
+           "no failure hangs (docs/robustness.md)",
+           Range::positive());
 }
 
 RunMode runMode(const Config& cfg) {

@@ -3,13 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
 #include <utility>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/fault.hpp"
 #include "coloc/coupling/simulation.hpp"
 #include "coloc/partition/setup.hpp"
 
@@ -496,9 +496,8 @@ void Simulation::writeCheckpoint(const std::string& path, const std::string& sta
     writeDemState(f, "/particles", *demState);
     f.setAttribute("/particles", "snapshot", demSnapshot);
   }
-  // Test hook (tests/robustness): die here, after the data and before the rename, at this step.
-  if (const char* k = std::getenv("COLOC_TEST_KILL_IN_CHECKPOINT"))
-    if (std::atoll(k) == steps_) std::raise(SIGKILL);
+  // Fault point (tests/robustness, coloc_faults only): after the data, before the rename.
+  fault::point("checkpoint", steps_);
   f.close();
 }
 

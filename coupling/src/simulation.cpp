@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/fault.hpp"
 #include "coloc/coupling/checkpoint.hpp"
 #include "coloc/partition/setup.hpp"
 
@@ -209,11 +210,13 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   if (checkpoint) {
     checkRestartable(dec_.comm(), *checkpoint, dec_.grid(), mode_);
     file.emplace(H5File::openRead(dec_.comm(), *checkpoint));
+    fault::point("restart", 0);
   }
   if (mode_ != RunMode::ParticlesOnly) {
     fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
     if (file) readFluidState(*file, "/fluid", dec_, *fluid_);
   }
+  fault::point("setup", 0);
   if (mode_ != RunMode::FluidOnly) {
     if (file) {
       dem::DemState state = readDemState(*file, "/particles");
@@ -328,6 +331,7 @@ void Simulation::step() {
       computeStencils();
       sampleFluidForDrag();
       evaluateDrag(dt);
+      fault::point("coupling", steps_ + 1);
       depositParticles();
       waitForSlowestRank();
       sumDepositsAcrossBlocks();
@@ -621,6 +625,7 @@ void Simulation::updateFluidCoefficients() {
 }
 
 void Simulation::advanceFluid(double dt) {
+  fault::point("fluid", steps_ + 1);
   fluid_->step(dt);
   lastStepDt_ = dt;
 }
@@ -727,7 +732,10 @@ void Simulation::handForcesToParticles() {
 }
 
 void Simulation::advanceParticles(int n) {
-  for (int s = 0; s < n; ++s) dem_->substep();
+  for (int s = 0; s < n; ++s) {
+    if (s == n / 2) fault::point("dem", steps_ + 1);
+    dem_->substep();
+  }
   substeps_ += n;
 }
 

@@ -92,12 +92,17 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t) : 
   const auto& grid = dec.grid();
   for (int a = 0; a < 3; ++a) {
     h[a] = grid.spacing(a);
-    if (dec.cells()[a] < kGhost)
-      throw ConfigError("partition.dims", "the fluid needs blocks of at least " +
-                                              std::to_string(kGhost) +
-                                              " cells along every axis; a block has " +
-                                              std::to_string(dec.cells()[a]) + " along axis " +
-                                              std::to_string(a) + ": use fewer ranks along it");
+    // Checked on every block's cuts, which every rank knows, so that every rank refuses
+    // together (a check of its own block only would leave the others waiting in hypre).
+    const auto& cuts = dec.cuts()[a];
+    int smallest = dec.cells()[a];
+    for (std::size_t c = 0; c + 1 < cuts.size(); ++c)
+      smallest = std::min(smallest, cuts[c + 1] - cuts[c]);
+    if (smallest < kGhost)
+      throw ConfigError("partition.dims",
+                        "the fluid needs blocks of at least " + std::to_string(kGhost) +
+                            " cells along every axis; a block has " + std::to_string(smallest) +
+                            " along axis " + std::to_string(a) + ": use fewer ranks along it");
   }
   for (int a = 0; a < 3; ++a)
     if (grid.periodic[a] && grid.cells[a] < 3)

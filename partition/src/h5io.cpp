@@ -1,10 +1,13 @@
 #include "coloc/partition/h5io.hpp"
 
 #include <hdf5.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -13,6 +16,7 @@
 #include <utility>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/failure.hpp"
 
 static_assert(std::is_same_v<hid_t, std::int64_t>, "H5File::id() assumes a 64-bit hid_t");
 
@@ -62,16 +66,62 @@ void silenceHdf5() {
   (void)done;
 }
 
-/// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ...").
+/// What the failed system call said, for the errors a user can act on (errno of the last call;
+/// set to 0 before the HDF5 call by ioCollective).
+std::string ioReason() {
+  switch (errno) {
+    case ENOSPC:
+    case EDQUOT:
+    case EFBIG:
+    case EROFS:
+    case EACCES:
+    case EIO:
+      return std::string(" (") + std::strerror(errno) + ")";
+    default:
+      return {};
+  }
+}
+
+/// After a failed write whose errno says nothing (MPI-IO often keeps it): a nearly full file
+/// system of `file` is named.
+std::string spaceReason(const std::string& file) {
+  struct statvfs st {};
+  const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+  if (::statvfs(dir.empty() ? "." : dir.c_str(), &st) != 0) return {};
+  const unsigned long long avail =
+      static_cast<unsigned long long>(st.f_bavail) * static_cast<unsigned long long>(st.f_frsize);
+  if (avail >= (1ull << 20)) return {};
+  return " (No space left on device: " + std::to_string(avail) +
+         " bytes free on the file system of '" + (dir.empty() ? std::string(".") : dir.string()) +
+         "')";
+}
+
+/// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ..."),
+/// coloc::IoError when `io` (a write: the driver exits with its I/O status).
 template <class F>
-void collective(const Comm& comm, const std::string& context, F&& f) {
+void collective(const Comm& comm, const std::string& context, F&& f, bool io = false) {
   std::string err;
+  errno = 0;
   try {
     f();
   } catch (const std::exception& e) {
     err = context + ": " + e.what();
+    if (io) {
+      std::string why = ioReason();
+      if (why.empty()) why = spaceReason(context.substr(0, context.find(":/")));
+      err += why;
+    }
   }
-  comm.raiseIfAny(err);
+  const std::string msg = comm.firstError(err, io ? 4 : 3);
+  if (msg.empty()) return;
+  if (io) throw IoError(msg);
+  throw Error(msg);
+}
+
+/// collective() for a write: its failure is a coloc::IoError.
+template <class F>
+void ioCollective(const Comm& comm, const std::string& context, F&& f) {
+  collective(comm, context, std::forward<F>(f), true);
 }
 
 // ---- handles ------------------------------------------------------------------------------------
@@ -264,7 +314,7 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
   });
   // 2. dataset creation (the same metadata operation on every rank) and selection
   Hid fspace, mspace, dset, xfer;
-  collective(comm, ctx, [&] {
+  ioCollective(comm, ctx, [&] {
     fspace = Hid(checkId(H5Screate_simple(s.rank, s.global.data(), nullptr), "H5Screate_simple"),
                  H5Sclose);
     Hid dcpl = plist(H5P_DATASET_CREATE, "H5Pcreate(dcpl)");
@@ -294,7 +344,7 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
   // 3. the collective transfer (nothing to move when the global array is empty)
   if (s.globalElements() == 0) return;
   static const double dummy = 0;
-  collective(comm, ctx, [&] {
+  ioCollective(comm, ctx, [&] {
     checkErr(H5Dwrite(dset, memType(e), mspace, fspace, xfer, buf ? buf : &dummy), "H5Dwrite");
   });
 }
@@ -441,7 +491,7 @@ void writeRows(H5File& file, const std::string& path, std::span<const T> local) 
 
 void writeAttribute(H5File& file, const std::string& object, const std::string& name, hid_t ftype,
                     hid_t mtype, hsize_t n, bool scalar, const void* data) {
-  collective(file.comm(), context(file, object) + " attribute '" + name + "'", [&] {
+  ioCollective(file.comm(), context(file, object) + " attribute '" + name + "'", [&] {
     if (!file.writable()) throw LocalFailure("file is open read-only");
     if (!file.exists(object)) throw LocalFailure("no such object");
     Hid obj(checkId(H5Oopen(file.id(), object.c_str(), H5P_DEFAULT), "H5Oopen"), H5Oclose);
@@ -530,7 +580,7 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
   f.root_ = comm.isRoot();
   hid_t id = -1;
   const FlatComm flat(comm.raw());
-  collective(comm, path, [&] {
+  ioCollective(comm, path, [&] {
     Hid fapl = mpioFapl(flat, true);
     id = H5Fcreate(f.writePath_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
     if (id < 0) throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
@@ -590,7 +640,20 @@ H5File::~H5File() {
 
 void H5File::release() noexcept {
   if (id_ < 0) return;
-  H5Fclose(static_cast<hid_t>(id_));
+  {
+    // An error path (the file is discarded): H5Fclose is collective and may not return if a
+    // rank fails inside it (a full disk while flushing the metadata): end every rank rather
+    // than hang (coloc/core/failure.hpp).
+    const FailureDeadline deadline("closing '" + writePath_ + "' after the error did not complete",
+                                   writable_ ? 4 : 3);
+    // The file is discarded: empty it first, so that the metadata HDF5 flushes while closing
+    // finds room on a full disk (a rank failing there would leave the others in a barrier).
+    if (writable_ && root_) {
+      std::error_code ec;
+      std::filesystem::resize_file(writePath_, 0, ec);
+    }
+    H5Fclose(static_cast<hid_t>(id_));
+  }
   id_ = -1;
   if (writable_ && root_) {  // no MPI call here: the communicator may be gone
     std::error_code ec;
@@ -601,15 +664,19 @@ void H5File::release() noexcept {
 void H5File::close() {
   if (id_ < 0) return;
   std::string err;
+  errno = 0;
   if (writable_ && sync_ && H5Fflush(static_cast<hid_t>(id_), H5F_SCOPE_GLOBAL) < 0)
-    err = "H5Fflush failed: " + h5ErrorText();
+    err = "H5Fflush failed: " + h5ErrorText() + ioReason();
+  if (!err.empty()) noteLocalFailure(writePath_ + ": " + err, 4);  // H5Fclose is collective
   if (H5Fclose(static_cast<hid_t>(id_)) < 0 && err.empty())
-    err = "H5Fclose failed: " + h5ErrorText();
+    err = "H5Fclose failed: " + h5ErrorText() + ioReason();
   id_ = -1;
   if (!err.empty()) err = writePath_ + ": " + err;
+  if (!err.empty()) noteLocalFailure(err, 4);
   // Every rank has closed once the reduction returns; rank 0 then publishes the file under its
   // name, or removes it when some rank failed.
   const bool failedSomewhere = comm_.max(err.empty() ? 0 : 1) != 0;
+  if (failedSomewhere) failureShared();
   if (writable_ && comm_.isRoot()) {
     std::error_code ec;
     if (failedSomewhere) {
@@ -619,14 +686,14 @@ void H5File::close() {
       if (ec) err = "cannot rename '" + writePath_ + "' to '" + path_ + "': " + ec.message();
     }
   }
-  comm_.raiseIfAny(err);
+  if (const std::string msg = comm_.firstError(err, 4); !msg.empty()) throw IoError(msg);
 }
 
 void H5File::createGroup(const std::string& path) {
   collective(comm_, context(*this, path), [&] {
     if (!writable_) throw LocalFailure("file is open read-only");
   });
-  collective(comm_, context(*this, path), [&] {
+  ioCollective(comm_, context(*this, path), [&] {
     if (exists(path)) return;
     Hid lcpl = parentsLcpl();
     Hid g(checkId(H5Gcreate2(id_, path.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT), "H5Gcreate2"),
@@ -945,9 +1012,10 @@ void XdmfSeries::write(const Comm& comm, const std::string& path) const {
     const std::string tmp = path + ".tmp";
     {
       std::ofstream out(tmp, std::ios::trunc);
+      errno = 0;
       out << xml();
       out.flush();
-      if (!out) err = "cannot write '" + tmp + "'";
+      if (!out) err = "cannot write '" + tmp + "'" + ioReason();
     }
     std::error_code ec;
     if (err.empty()) {
@@ -956,7 +1024,7 @@ void XdmfSeries::write(const Comm& comm, const std::string& path) const {
     }
     if (!err.empty()) std::filesystem::remove(tmp, ec);
   }
-  comm.raiseIfAny(err);
+  if (const std::string msg = comm.firstError(err, 4); !msg.empty()) throw IoError(msg);
 }
 
 }  // namespace coloc

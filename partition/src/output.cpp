@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/fault.hpp"
 #include "coloc/core/report.hpp"
 
 namespace coloc {
@@ -115,7 +116,7 @@ void OutputWriter::ensureDir() {
       err = std::string("output directory: ") + e.what();
     }
   }
-  dec_->comm().raiseIfAny(err);
+  if (const std::string msg = dec_->comm().firstError(err, 4); !msg.empty()) throw IoError(msg);
   dirReady_ = true;
 }
 
@@ -157,6 +158,7 @@ std::string OutputWriter::writeFields(long long step, double time,
         writeCellField(file, ds, dec, *f.c[0]);
       if (!f.units.empty()) file.setAttribute(ds, "units", f.units);
       entry.attributes.push_back({f.name, f.isVector(), ds});
+      if (entry.attributes.size() == 1) fault::point("output", step);  // inside an open file
     }
     file.close();
   }

@@ -99,7 +99,8 @@ case $test in
   kill)
     common=(--set run.steps=8 --set output.checkpoint_interval=2)
     run 2 "$work/full" "${common[@]}" || { cat "$work/full.log"; fail "uninterrupted run failed"; }
-    (export COLOC_TEST_KILL_IN_CHECKPOINT=6; run 2 "$work/k" "${common[@]}") &&
+    # the test build of the driver (COLOC_FAULTS: coloc_faults) has the kill hook
+    (export COLOC_TEST_KILL_IN_CHECKPOINT=6; coloc=${COLOC_FAULTS:?}; run 2 "$work/k" "${common[@]}") &&
       fail "the killed run exited 0"
     [[ -f $work/k/checkpoint.h5 ]] || fail "no checkpoint left by the killed run"
     [[ -f $work/k/checkpoint.h5.tmp ]] || echo "note: no checkpoint.h5.tmp left (killed early)"

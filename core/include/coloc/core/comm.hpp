@@ -121,6 +121,10 @@ class Comm {
   /// Collective error path: every rank calls it; if any rank passes a non-empty message, every
   /// rank throws coloc::Error with the message of the lowest failing rank (prefixed by its rank).
   void raiseIfAny(const std::string& localError) const;
+  /// The same agreement, returned: "" when no rank failed, else the message raiseIfAny would
+  /// throw (for callers that throw another Error type). `exitCode`: what the deadline of a rank
+  /// that failed alone ends the run with (coloc/core/failure.hpp).
+  std::string firstError(const std::string& localError, int exitCode = 3) const;
 
   template <class T>
   MPI_Request isend(std::span<const T> buf, int dest, int tag) const {

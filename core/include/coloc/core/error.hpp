@@ -12,9 +12,20 @@
 
 namespace coloc {
 
+void rememberError(const char* what);  // coloc/core/failure.hpp
+
 class Error : public std::runtime_error {
  public:
-  explicit Error(const std::string& what) : std::runtime_error(what) {}
+  explicit Error(const std::string& what) : std::runtime_error(what) {
+    rememberError(this->what());
+  }
+};
+
+/// A file or directory could not be written (a full disk, no permission, a read-only file
+/// system, a file-size limit): the driver exits with status 4 (docs/robustness.md).
+class IoError : public Error {
+ public:
+  explicit IoError(const std::string& what) : Error(what) {}
 };
 
 /// Error in the case file or the command line; the message names the key path.

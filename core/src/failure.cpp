@@ -1,0 +1,182 @@
+#include "coloc/core/failure.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <mutex>
+#include <thread>
+
+namespace coloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// The watchdog: armed deadlines, and one thread (started at the first arming) that ends every
+/// rank when the earliest passes. Process-wide like MPI itself; never destroyed (the thread may
+/// still wait on it while the process exits).
+struct Watch {
+  std::mutex m;
+  std::condition_variable cv;
+  struct Entry {
+    Clock::time_point deadline;
+    std::string message;
+    int code = 3;
+  };
+  std::map<long long, Entry> armed;  // id -> entry; id 0 is the local failure
+  long long next = 1;
+  double wait = 10.0;
+  std::string lastError;
+  bool started = false;
+
+  void ensureThread() {  // with m held
+    if (started) return;
+    started = true;
+    std::thread([this] { run(); }).detach();
+  }
+  void run() {
+    std::unique_lock<std::mutex> lock(m);
+    while (true) {
+      if (armed.empty()) {
+        cv.wait(lock);
+        continue;
+      }
+      auto first = armed.begin();
+      for (auto it = armed.begin(); it != armed.end(); ++it)
+        if (it->second.deadline < first->second.deadline) first = it;
+      const Clock::time_point when = first->second.deadline;
+      if (Clock::now() < when) {
+        cv.wait_until(lock, when);
+        continue;
+      }
+      // A local failure is the cause; else say what did not return, after the last error.
+      const auto local = armed.find(0);
+      std::string msg;
+      int code = first->second.code;
+      if (local != armed.end()) {
+        msg = local->second.message;
+        code = local->second.code;
+      } else {
+        msg = (lastError.empty() ? std::string() : lastError + "; then ") + first->second.message;
+      }
+      int rank = 0, size = 1;
+      MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+      MPI_Comm_size(MPI_COMM_WORLD, &size);
+      const std::string who = size > 1 ? "rank " + std::to_string(rank) + ": " : "";
+      std::fprintf(stderr,
+                   "coloc: error: %s%s (the other ranks did not join the error check within "
+                   "%g s: stopping every rank)\n",
+                   who.c_str(), msg.c_str(), wait);
+      std::fflush(stderr);
+      MPI_Abort(MPI_COMM_WORLD, code);
+      std::_Exit(code);
+    }
+  }
+};
+
+Watch& watch() {
+  static Watch* w = new Watch;  // intentionally never freed (see Watch)
+  return *w;
+}
+
+/// Rank 0's deadline passes first, the others' a second later: when several ranks are stuck,
+/// rank 0 prints and its MPI_Abort ends the others before they print too.
+Clock::time_point deadlineFromNow(double seconds) {
+  int rank = 0, ready = 0;
+  MPI_Initialized(&ready);
+  if (ready) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank > 0) seconds += 1.0;
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+}  // namespace
+
+void setFailureWait(double seconds) {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  w.wait = seconds;
+}
+
+double failureWait() {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  return w.wait;
+}
+
+void noteLocalFailure(const std::string& message, int exitCode) {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  if (w.armed.count(0)) return;  // the first failure is the cause
+  w.armed[0] = {deadlineFromNow(w.wait), message, exitCode};
+  w.ensureThread();
+  w.cv.notify_all();
+}
+
+void failureShared() {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  w.armed.erase(0);
+  w.cv.notify_all();
+}
+
+void rememberError(const char* what) {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  w.lastError = what ? what : "";
+}
+
+FailureDeadline::FailureDeadline(const std::string& what, int exitCode) {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  id_ = w.next++;
+  w.armed[id_] = {deadlineFromNow(w.wait), what, exitCode};
+  w.ensureThread();
+  w.cv.notify_all();
+}
+
+FailureDeadline::~FailureDeadline() {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  w.armed.erase(id_);
+  w.cv.notify_all();
+}
+
+FailureChannel::FailureChannel(const Comm& comm) {
+  MPI_Comm dup = MPI_COMM_NULL;
+  MPI_Comm_dup(comm.raw(), &dup);
+  comm_ = Comm(dup);
+}
+
+FailureChannel::~FailureChannel() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  MPI_Comm c = comm_.raw();
+  if (!finalized && c != MPI_COMM_NULL) MPI_Comm_free(&c);
+}
+
+FailureChannel::Verdict FailureChannel::agree(const std::string& error, int code, int signal,
+                                              int where) const {
+  const int me = comm_.rank(), size = comm_.size();
+  const bool mine = !error.empty() || code != 0;
+  if (mine) noteLocalFailure(error.empty() ? "failed" : error, code != 0 ? code : 3);
+  // One allreduce in the common case: the lowest failing rank and the largest signal.
+  int in[2] = {mine ? me : size, -signal}, out[2] = {size, 0};
+  MPI_Allreduce(in, out, 2, MPI_INT, MPI_MIN, comm_.raw());
+  Verdict v;
+  v.signal = -out[1];
+  if (out[0] == size) return v;
+  v.rank = out[0];
+  v.failing = comm_.sum(mine ? 1 : 0);
+  int c[2] = {code != 0 ? code : 3, where};
+  MPI_Bcast(c, 2, MPI_INT, v.rank, comm_.raw());
+  v.code = c[0];
+  v.where = c[1];
+  v.message = comm_.broadcast(v.rank == me ? error : std::string(), v.rank);
+  if (v.failing < size && size > 1) v.message = "rank " + std::to_string(v.rank) + ": " + v.message;
+  failureShared();
+  return v;
+}
+
+}  // namespace coloc
