@@ -28,6 +28,8 @@ struct Watch {
   long long next = 1;
   double wait = 10.0;
   std::string lastError;
+  std::map<long long, std::string> doomed;  // removeOnAbort: id -> path
+  long long nextDoomed = 1;
   bool started = false;
 
   void ensureThread() {  // with m held
@@ -69,6 +71,7 @@ struct Watch {
                    "%g s: stopping every rank)\n",
                    who.c_str(), msg.c_str(), wait);
       std::fflush(stderr);
+      for (const auto& entry : doomed) std::remove(entry.second.c_str());
       MPI_Abort(MPI_COMM_WORLD, code);
       std::_Exit(code);
     }
@@ -92,6 +95,21 @@ Clock::time_point deadlineFromNow(double seconds) {
 }
 
 }  // namespace
+
+long long removeOnAbort(const std::string& path) {
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  const long long id = w.nextDoomed++;
+  w.doomed[id] = path;
+  return id;
+}
+
+void forgetOnAbort(long long id) {
+  if (id <= 0) return;
+  Watch& w = watch();
+  std::lock_guard<std::mutex> lock(w.m);
+  w.doomed.erase(id);
+}
 
 void setFailureWait(double seconds) {
   Watch& w = watch();

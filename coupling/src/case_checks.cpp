@@ -163,9 +163,7 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
 
 Int3 largestUniformBlock(const Config& cfg, int ranks) {
   const GlobalGrid g = gridFromConfig(cfg);
-  const auto d = cfg.intVec3("partition.dims");
-  const Int3 dims = Decomposition::chooseDims(
-      ranks, g, {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])});
+  const Int3 dims = processGridFromConfig(cfg, ranks);  // the run's own grid (and its errors)
   Int3 b{};
   for (int a = 0; a < 3; ++a) b[a] = (g.cells[a] + std::max(dims[a], 1) - 1) / std::max(dims[a], 1);
   return b;

@@ -578,6 +578,7 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
   f.writable_ = true;
   f.sync_ = sync;
   f.root_ = comm.isRoot();
+  f.abortId_ = removeOnAbort(f.writePath_);  // a deadline stop leaves no partial file
   hid_t id = -1;
   const FlatComm flat(comm.raw());
   ioCollective(comm, path, [&] {
@@ -617,7 +618,8 @@ H5File::H5File(H5File&& o) noexcept
       writable_(o.writable_),
       sync_(o.sync_),
       root_(o.root_),
-      checksums_(o.checksums_) {}
+      checksums_(o.checksums_),
+      abortId_(std::exchange(o.abortId_, 0)) {}
 
 H5File& H5File::operator=(H5File&& o) noexcept {
   if (this != &o) {
@@ -630,6 +632,7 @@ H5File& H5File::operator=(H5File&& o) noexcept {
     sync_ = o.sync_;
     root_ = o.root_;
     checksums_ = o.checksums_;
+    abortId_ = std::exchange(o.abortId_, 0);
   }
   return *this;
 }
@@ -639,7 +642,10 @@ H5File::~H5File() {
 }
 
 void H5File::release() noexcept {
-  if (id_ < 0) return;
+  if (id_ < 0) {
+    forgetOnAbort(std::exchange(abortId_, 0));
+    return;
+  }
   {
     // An error path (the file is discarded): H5Fclose is collective and may not return if a
     // rank fails inside it (a full disk while flushing the metadata): end every rank rather
@@ -659,6 +665,7 @@ void H5File::release() noexcept {
     std::error_code ec;
     std::filesystem::remove(writePath_, ec);
   }
+  forgetOnAbort(std::exchange(abortId_, 0));
 }
 
 void H5File::close() {
@@ -686,6 +693,7 @@ void H5File::close() {
       if (ec) err = "cannot rename '" + writePath_ + "' to '" + path_ + "': " + ec.message();
     }
   }
+  forgetOnAbort(std::exchange(abortId_, 0));
   if (const std::string msg = comm_.firstError(err, 4); !msg.empty()) throw IoError(msg);
 }
 

@@ -35,6 +35,11 @@ double failureWait();
 void noteLocalFailure(const std::string& message, int exitCode);
 /// A collective agreement showed the failure to every rank of the communicator: disarm.
 void failureShared();
+/// A half-written file that a deadline stop (layer 2) removes before it ends the rank: a stop
+/// must not leave a partial file behind (the next run would find it). Returns an id for
+/// forgetOnAbort, which the writer calls once the file is published or removed.
+long long removeOnAbort(const std::string& path);
+void forgetOnAbort(long long id);
 /// The last coloc::Error made on this rank (for a deadline that fires while one is unwinding).
 void rememberError(const char* what);
 

@@ -93,6 +93,7 @@ class H5File {
   std::int64_t id_ = -1;
   std::string path_, writePath_;
   bool writable_ = false, sync_ = false, root_ = false, checksums_ = false;
+  long long abortId_ = 0;  // writePath_ registered with removeOnAbort (core/failure.hpp)
 };
 
 // ---- fields: each rank writes/reads its owned block of the global array -----------------------
