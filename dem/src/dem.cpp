@@ -220,6 +220,9 @@ struct DemSolver::Impl {
   void setupFaces(const Config& cfg);
   bool beyondOutflow(std::size_t i, int* which) const;
   void removeOutflow();
+  /// Owned row i kept as row w (w <= i) while rows before it leave (migration, outflow), its
+  /// packed contact histories [h0, h1) moved down to hw on.
+  void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
   void insertInflow();
   double massOf(int material, double r) const {
     return mats[static_cast<std::size_t>(material)].density * 4.0 / 3.0 * M_PI * r * r * r;
@@ -766,6 +769,30 @@ bool DemSolver::Impl::beyondOutflow(std::size_t i, int* which) const {
   return false;
 }
 
+void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
+  if (w != i) {
+    p.id[w] = p.id[i];
+    p.material[w] = p.material[i];
+    p.radius[w] = p.radius[i];
+    p.mass[w] = p.mass[i];
+    for (int k = 0; k < 3; ++k) {
+      p.x[k][w] = p.x[k][i];
+      p.v[k][w] = p.v[k][i];
+      p.omega[k][w] = p.omega[k][i];
+      p.f[k][w] = p.f[k][i];
+      p.torque[k][w] = p.torque[k][i];
+      p.fExt[k][w] = p.fExt[k][i];
+    }
+  }
+  hStart[w] = hw;
+  for (int e = h0; e < h1; ++e, ++hw) {
+    hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
+    for (int k = 0; k < 3; ++k)
+      hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
+          hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
+  }
+}
+
 void DemSolver::Impl::removeOutflow() {
   // After packHistory (rows per owned particle): particles whose centre is beyond an outflow
   // face leave with their rows; rows of other particles keyed by their ids are taken by no list
@@ -782,27 +809,7 @@ void DemSolver::Impl::removeOutflow() {
       ++flow.countOutByFace[static_cast<std::size_t>(fc)];
       continue;
     }
-    if (w != i) {
-      p.id[w] = p.id[i];
-      p.material[w] = p.material[i];
-      p.radius[w] = p.radius[i];
-      p.mass[w] = p.mass[i];
-      for (int k = 0; k < 3; ++k) {
-        p.x[k][w] = p.x[k][i];
-        p.v[k][w] = p.v[k][i];
-        p.omega[k][w] = p.omega[k][i];
-        p.f[k][w] = p.f[k][i];
-        p.torque[k][w] = p.torque[k][i];
-        p.fExt[k][w] = p.fExt[k][i];
-      }
-    }
-    hStart[w] = hw;
-    for (int e = h0; e < h1; ++e, ++hw) {
-      hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
-      for (int k = 0; k < 3; ++k)
-        hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
-            hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
-    }
+    keepRow(i, w, h0, h1, hw);
     ++w;
   }
   if (w == n) return;
@@ -1208,27 +1215,7 @@ void DemSolver::Impl::migrate() {
       const int h0 = hStart[i], h1 = hStart[i + 1];
       if (dir != 0 && dec.neighbor(d, dir) == MPI_PROC_NULL) dir = 0;  // cannot happen
       if (dir == 0) {
-        if (w != i) {
-          p.id[w] = p.id[i];
-          p.material[w] = p.material[i];
-          p.radius[w] = p.radius[i];
-          p.mass[w] = p.mass[i];
-          for (int k = 0; k < 3; ++k) {
-            p.x[k][w] = p.x[k][i];
-            p.v[k][w] = p.v[k][i];
-            p.omega[k][w] = p.omega[k][i];
-            p.f[k][w] = p.f[k][i];
-            p.torque[k][w] = p.torque[k][i];
-            p.fExt[k][w] = p.fExt[k][i];
-          }
-        }
-        hStart[w] = hw;
-        for (int e = h0; e < h1; ++e, ++hw) {
-          hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
-          for (int k = 0; k < 3; ++k)
-            hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
-                hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
-        }
+        keepRow(i, w, h0, h1, hw);
         ++w;
       } else {
         auto& b = sbuf[dir > 0 ? 1 : 0];
