@@ -2,7 +2,7 @@
 //
 // The Simulation owns the decomposition shared by both physics, the fluid solver, the DEM, the
 // timers and the coupling buffers; nothing is global. One coupled step reads as the algorithm
-// (SPEC section 3, ../shared/ARCHITECTURE.md):
+// (docs/benchmarks.md and docs/fv.md, docs/dem.md for the models):
 //
 //   waitForSlowestRank()         timed barrier: load imbalance -> sync       (wait)
 //   computeStencils()            particles' kernel cells and weights         (coupling)

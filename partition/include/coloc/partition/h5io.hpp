@@ -6,7 +6,7 @@
 // cannot be created, a missing dataset, a shape mismatch, any HDF5 error) become coloc::Error on
 // every rank, through Comm::raiseIfAny, never a hang or an HDF5 error dump.
 //
-// Layout on disk (x fastest, as in memory; see ../shared/TOOLCHAIN.md):
+// Layout on disk (x fastest, as in memory; docs/output.md):
 //   cell field             double [nz][ny][nx]
 //   cell vector            double [nz][ny][nx][3]   (components interleaved)
 //   face component d       double [nz'][ny'][nx']   (one more face along d on a closed axis)
