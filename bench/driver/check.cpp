@@ -284,12 +284,18 @@ int checkCase(const CheckOptions& opts) {
     double u = 0;
     const auto iv = cfg.vec3("fluid.initial_velocity");
     for (int a = 0; a < 3; ++a) u = std::max(u, std::fabs(iv[a]));
-    for (const char* f : {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"}) {
-      const auto& b = cfg.at(std::string("fluid.boundary.") + f);
-      if (b.at("type").get<std::string>() != "inlet") continue;
+    // The fastest inlet, a whole face or a patch of one (fluid.patches).
+    std::vector<Json> inlets;
+    for (const char* f : {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"})
+      inlets.push_back(cfg.at(std::string("fluid.boundary.") + f));
+    if (cfg.has("fluid.patches"))
+      for (const auto& patch : cfg.at("fluid.patches")) inlets.push_back(patch);
+    for (const Json& b : inlets) {
+      if (b.at("type").get<std::string>() != "inlet" || !b.contains("velocity")) continue;
       double s = 0;
       for (int a = 0; a < 3; ++a) s = std::max(s, std::fabs(b.at("velocity")[a].get<double>()));
-      if (b.at("superficial").get<bool>() && mode != RunMode::FluidOnly)
+      if (b.contains("superficial") && b.at("superficial").get<bool>() &&
+          mode != RunMode::FluidOnly)
         s /= cfg.number("coupling.eps_min");
       u = std::max(u, s);
     }
