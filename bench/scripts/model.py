@@ -3,87 +3,219 @@
 
 time per step of rank r = unit costs measured on 1 rank (report.json timers)
                           x the rank's work from `coloc plan` (plan.json)
+                          x the memory-bandwidth contention of the ranks sharing its node
+                        + the pressure solve's per-level and per-iteration latencies
                         + its messages through a latency-bandwidth network model.
 
-Unit costs (seconds, wall, from a 1-rank run of the same physics; fitted per case):
-  fluid   per cell-step, excluding the pressure solve, plus per cell and pressure iteration;
-  DEM     per particle and sub-step (neighbour, force, integrate; contacts folded in: the
-          calibration runs start from rest, a per-contact cost cannot be told apart);
-  coupling per particle-step (deposit, interpolate, drag) on the rank's coupled particles
-          (its own particles co-located, the proxies it receives in the independent strategy).
+Unit costs (seconds from a 1-rank run of the same physics; wall, or thread-CPU with --busy):
+  fluid          per cell-step (momentum, boundaries, projection, cell fields);
+  pressure set-up per cell-step (fluid_pressure_assemble: right-hand side, matrix and, where the
+                 coefficients change, hypre's PCG+PFMG set-up; report.pressure.setups counts them);
+  pressure solve per cell and PCG iteration, x the iterations per step of the 1-rank run;
+  hypre's overhead per PFMG level and face neighbour (per iteration, per set-up) that 1 rank
+                 cannot show: bench_fv BM_PressureSolve at 1 and 2 ranks (--pfmg1, --pfmg2);
+  DEM            per particle and sub-step (contacts folded in);
+  coupling       per particle-step on the rank's coupled particles (own, or proxies).
+Memory term (bench_stream, --stream): B(k) = the triad bandwidth ONE rank gets while k ranks of a
+  node stream at once; contention c(k) = B(1) / B(k). Each phase group g has a memory-bound share
+  m_g, measured by re-running the 1-rank calibration beside a streaming co-runner (--corun):
+  slowdown s_g = t_g(with co-runner) / t_g(alone), m_g = (s_g - 1) / (c(2) - 1) in [0, 1]. At P
+  ranks with n = min(P, ranks a node) on each node, group g costs t_g x (1 + m_g (c(n) - 1)).
+Pressure solve latency per PCG iteration: levels x 7 halo exchanges (V(1,1): 2 red-black
+  half-sweeps before and after, residual, restriction, interpolation) + 1 (matrix-vector
+  product), each one message to each face neighbour; 3 allreduces (latency x ceil(log2 P)); the
+  bytes of one layer of p on the fine level, twice (coarse levels). Per set-up: levels x 2
+  exchanges (coarse operators). levels = 1 + sum_d ceil(log2 n_d) (PFMG semi-coarsening).
 Network per rank and step, per traffic kind of plan.json (bytes, messages):
   t = messages * latency + bytes / bandwidth_per_rank,
-  bandwidth_per_rank = link bandwidth / ranks sharing a node's injection (min(ranks, per_node));
-  the pressure solve adds per iteration 2 allreduces (latency x log2 P) and a one-layer halo of p
-  on each of ~2 multigrid levels' worth of cells (6 messages a level).
-Shares: fluid = fluid work + fluid halos + pressure messages; DEM = DEM work + ghost updates;
-coupling = coupling arithmetic; inter-physics = deposit sum + proxies (+ the in-rank copies of
-the independent strategy at memory speed); wait = step - mean rank time (imbalance). The step is
-the slowest rank's time (the two timed barriers of a step make every rank wait for it).
+  bandwidth_per_rank = link bandwidth / min(ranks, ranks a node sharing the injection).
+Shares: fluid = fluid work + pressure + fluid halos; DEM = DEM work + ghost updates; coupling =
+coupling arithmetic; inter-physics = deposit sum + proxies (+ in-rank copies of the independent
+strategy at memory speed); wait = step - mean rank time. The step is the slowest rank's time.
 
 Usage:
-  model.py calibrate REPORT_1RANK.json > costs.json
+  model.py calibrate [--busy] REPORT_1RANK.json [--corun REPORT_1RANK_CORUN.json
+                     --stream stream.json] [--pfmg1 fv1.json --pfmg2 fv2.json
+                     --pingpong pingpong.json] > costs.json
   model.py predict --costs costs.json --plan plan.json --profile edr-ib|PINGPONG.json
-                   [--csv out.csv] [--png out.png] [--title T]
+                   [--stream stream.json] [--csv out.csv] [--png out.png] [--title T]
+Validation at 1 and 2 ranks: bench/scripts/validate_model.py.
 """
 import argparse
 import json
 import math
 import sys
 
-FLUID = ["fluid_momentum", "fluid_boundary", "fluid_pressure_assemble", "fluid_project",
-         "fluid_cell_fields"]
-DEM = ["dem_neighbor", "dem_force", "dem_integrate"]
-COUPLING = ["coupling_deposit", "coupling_interpolate", "coupling_drag"]
+GROUPS = {
+    "fluid": ["fluid_momentum", "fluid_boundary", "fluid_project", "fluid_cell_fields"],
+    "pressure_setup": ["fluid_pressure_assemble"],
+    "pressure_solve": ["fluid_pressure_solve"],
+    "dem": ["dem_neighbor", "dem_force", "dem_integrate"],
+    "coupling": ["coupling_deposit", "coupling_interpolate", "coupling_drag"],
+}
+EXCH_PER_LEVEL = 7   # PFMG V(1,1), symmetric red-black relaxation
+EXCH_PER_ITER = 1    # PCG matrix-vector product
+ALLREDUCES_PER_ITER = 3  # PCG: (r, z), (p, Ap), the two-norm of r
+EXCH_PER_SETUP_LEVEL = 2
 PROFILES = {
     # EDR InfiniBand: ~1 us, ~12 GB/s per link, 28 ranks a node sharing the injection bandwidth.
+    # Memory (ASSUMPTION, no such node measured here): a dual-socket 14-core Xeon E5-2680 v4
+    # node, 8 channels of DDR4-2400 = 153.6 GB/s peak; STREAM triad ~110 GB/s a node, ~12 GB/s
+    # for one core alone: c(n) = max(1, 12 n / 110) -> 3.05 at 28 ranks a node.
     "edr-ib": {"latency_s": 1.0e-6, "bandwidth_Bps": 12.0e9, "ranks_per_node": 28,
-               "memory_Bps": 10.0e9},
+               "memory_Bps": 10.0e9,
+               "memory": {"core_Bps": 12.0e9, "node_Bps": 110.0e9, "ranks_per_node": 28}},
 }
 
 
-KEY = "avg"
+def timer(report, name, key):
+    return report["timers"].get(name, {}).get(key, 0.0)
 
 
-def t(report, name):
-    return report["timers"].get(name, {}).get(KEY, 0.0)
+def group_times(report, key):
+    return {g: sum(timer(report, n, key) for n in names) for g, names in GROUPS.items()}
 
 
-def calibrate(report):
+def contention(mem, n):
+    """c(n) = B(1) / B(n): how much slower a memory-bound loop runs with n ranks of a node."""
+    if n <= 1 or not mem:
+        return 1.0
+    if "per_rank_Bps" in mem:
+        b = mem["per_rank_Bps"]
+        if n <= len(b):
+            return b[0] / b[n - 1]
+        node = max((k + 1) * x for k, x in enumerate(b))
+        return max(b[0] / b[-1], b[0] * n / node)
+    return max(1.0, mem["core_Bps"] * n / mem["node_Bps"])
+
+
+def stream_memory(stream):
+    """The memory spec of a bench_stream JSON: its largest working set (beyond the caches)."""
+    return {"per_rank_Bps": stream["per_rank_Bps"][-1], "ranks_per_node": stream["ranks"],
+            "size_mib": stream["sizes_mib"][-1], "loadavg": stream.get("loadavg", "")}
+
+
+def bench_points(bench, busy):
+    """BM_PressureSolve/n/0 (bench_fv, --benchmark_format=json): {n: (seconds per PCG iteration,
+    set-up seconds, ranks)}; thread-CPU times with busy."""
+    pts = {}
+    for b in bench.get("benchmarks", []):
+        parts = b["name"].split("/")
+        if parts[0] != "BM_PressureSolve" or parts[2] != "0" or b.get("run_type") == "aggregate":
+            continue
+        unit = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[b.get("time_unit", "ns")]
+        t = b["cpu_time" if busy else "real_time"] * unit
+        its = max(b["iterations"], 1)  # the PCG counter: written after Google Benchmark's own
+        setup = b.get("setup_cpu_s", b["setup_s"]) if busy else b["setup_s"]
+        pts[int(parts[1])] = (t / its, setup, int(b["ranks"]))
+    return pts
+
+
+def solver_overhead(costs, one, two, busy, latency):
+    """hypre's cost per PFMG level and face neighbour that a 1-rank run cannot show (comm
+    packages, packing, the coarse levels' halos), per PCG iteration and per set-up: from
+    bench_fv BM_PressureSolve on an n^3 cube at 1 and 2 ranks (2 x 1 x 1: one neighbour),
+    o = (t(2 ranks) - f t(1 rank) / 2) / levels, f the memory contention of the phase at 2 ranks,
+    less the message latencies the network model adds itself."""
+    p1, p2 = bench_points(one, busy), bench_points(two, busy)
+    c2 = costs.get("memory_calibration", {}).get("contention_2", 1.0)
+    ms = costs["memory_share"]
+    f_it = 1 + ms["pressure_solve"] * (c2 - 1)
+    f_su = 1 + ms["pressure_setup"] * (c2 - 1)
+    o_it, o_su, used = [], [], []
+    for n in sorted(set(p1) & set(p2)):
+        if p1[n][2] != 1 or p2[n][2] != 2:
+            continue
+        levels = 1 + 3 * math.ceil(math.log2(n))
+        o_it.append(max(0.0, p2[n][0] - f_it * p1[n][0] / 2) / levels
+                    - (EXCH_PER_LEVEL + 1) * latency - ALLREDUCES_PER_ITER * latency / levels)
+        o_su.append(max(0.0, p2[n][1] - f_su * p1[n][1] / 2) / levels
+                    - EXCH_PER_SETUP_LEVEL * latency)
+        used.append([n, p1[n][0], p2[n][0], p1[n][1], p2[n][1]])
+    if not used:
+        return None
+    return {"per_level_neighbour_iteration_s": max(0.0, sum(o_it) / len(o_it)),
+            "per_level_neighbour_setup_s": max(0.0, sum(o_su) / len(o_su)),
+            "points_n_iter1_iter2_setup1_setup2": used}
+
+
+def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None, latency=0.0):
     steps = report["run"]["steps"] - report["run"].get("first_step", 0)
     sub = report["run"]["dem_substeps"]
     cells = 1
     for c in report["config"]["domain"]["cells"]:
         cells *= c
     n = report["particles"]["count"] if "particles" in report else 0
-    iters = report.get("pressure", {}).get("iterations_avg", 0.0) * steps
-    solve = t(report, "fluid_pressure_solve")
-    fluid = sum(t(report, p) for p in FLUID)
-    dem = sum(t(report, p) for p in DEM)
-    cpl = sum(t(report, p) for p in COUPLING)
+    pres = report.get("pressure", {})
+    iters = pres.get("iterations_avg", 0.0) * steps
+    tg = group_times(report, key)
     frozen = report.get("particles", {}).get("frozen", False)
-    return {
+    costs = {
         "source": report["case"] if isinstance(report["case"], str) else str(report["case"]),
-        "fluid_per_cell_step": fluid / (cells * steps),
-        "pressure_per_cell_iteration": solve / (cells * iters) if iters > 0 else 0.0,
+        "cells": cells,
+        "fluid_per_cell_step": tg["fluid"] / (cells * steps),
+        "pressure_setup_per_cell_step": tg["pressure_setup"] / (cells * steps),
+        "pressure_setups_per_step": pres.get("setups", steps) / steps,
+        "pressure_per_cell_iteration": tg["pressure_solve"] / (cells * iters) if iters > 0 else 0.0,
         "pressure_iterations_per_step": iters / steps,
-        "dem_per_particle_substep": 0.0 if frozen or sub == 0 or n == 0 else dem / (n * sub),
-        "coupling_per_particle_step": cpl / (n * steps) if n else 0.0,
-        "timer": "wall" if KEY == "avg" else "busy (thread CPU)",
+        "dem_per_particle_substep": 0.0 if frozen or sub == 0 or n == 0 else tg["dem"] / (n * sub),
+        "coupling_per_particle_step": tg["coupling"] / (n * steps) if n else 0.0,
+        "timer": "wall" if key == "avg" else "busy (thread CPU)",
         "measured_step_s": report["run"]["wall_s"] / steps,
         "measured_busy_step_s": report["load"]["busy_s_max"] / steps,
         "measured_fractions": report["fractions"],
+        "memory_share": {g: 0.0 for g in GROUPS},
+        "pressure_overhead": {"per_level_neighbour_iteration_s": 0.0,
+                              "per_level_neighbour_setup_s": 0.0},
     }
+    if corun is not None and stream is not None:
+        c2 = contention(stream_memory(stream), 2)
+        tc = group_times(corun, key)
+        csteps = corun["run"]["steps"] - corun["run"].get("first_step", 0)
+        slow = {}
+        for g in GROUPS:
+            if tg[g] > 0 and tc[g] > 0:
+                slow[g] = (tc[g] / csteps) / (tg[g] / steps)
+                costs["memory_share"][g] = (min(1.0, max(0.0, (slow[g] - 1) / (c2 - 1)))
+                                            if c2 > 1.0 else 0.0)
+        costs["memory_calibration"] = {"contention_2": c2, "slowdown_with_corunner": slow,
+                                       "stream_loadavg": stream.get("loadavg", "")}
+    if pfmg1 is not None and pfmg2 is not None:
+        o = solver_overhead(costs, pfmg1, pfmg2, key != "avg", latency)
+        if o:
+            costs["pressure_overhead"] = o
+    return costs
 
 
-def profile(spec):
+def profile(spec, stream=None):
     if spec in PROFILES:
-        return dict(PROFILES[spec], name=spec)
-    with open(spec) as f:
-        p = json.load(f)
-    # this machine: the measured ping-pong, both ranks on one node (shared memory)
-    return {"latency_s": p["latency_s"], "bandwidth_Bps": p["bandwidth_Bps"],
-            "ranks_per_node": 1, "memory_Bps": p["bandwidth_Bps"], "name": "this machine"}
+        prof = dict(PROFILES[spec], name=spec)
+    else:
+        with open(spec) as f:
+            p = json.load(f)
+        # this machine: the measured ping-pong, all ranks on one node (shared memory)
+        prof = {"latency_s": p["latency_s"], "bandwidth_Bps": p["bandwidth_Bps"],
+                "ranks_per_node": 1, "memory_Bps": p["bandwidth_Bps"], "name": "this machine",
+                "memory": None}
+    if stream is not None:
+        prof["memory"] = stream_memory(stream)
+        prof["name"] += " + measured stream"
+    return prof
+
+
+def neighbours(dims, r):
+    """Face neighbours of rank r of a non-periodic dims grid (MPI_Cart order, last axis
+    fastest)."""
+    c = [0, 0, 0]
+    for a in (2, 1, 0):
+        c[a] = r % dims[a]
+        r //= dims[a]
+    return sum((c[a] > 0) + (c[a] < dims[a] - 1) for a in range(3) if dims[a] > 1)
+
+
+def pfmg_levels(layout):
+    dims = [cuts[-1] for cuts in layout["fluid_cuts"]]
+    return 1 + sum(math.ceil(math.log2(n)) for n in dims if n > 1)
 
 
 def predict_layout(costs, layout, prof):
@@ -95,8 +227,19 @@ def predict_layout(costs, layout, prof):
     share = min(P, prof["ranks_per_node"]) if prof["ranks_per_node"] > 1 else 1
     bw = prof["bandwidth_Bps"] / share
     lat = prof["latency_s"]
+    mem = prof.get("memory")
+    node = min(P, mem["ranks_per_node"]) if mem else 1
+    c = contention(mem, node)
+    ms = costs.get("memory_share", {})
+    f = {g: 1.0 + ms.get(g, 0.0) * (c - 1.0) for g in GROUPS}
     iters = costs["pressure_iterations_per_step"]
+    setups = costs.get("pressure_setups_per_step", 1.0)
+    ov = costs.get("pressure_overhead", {})
+    o_it = ov.get("per_level_neighbour_iteration_s", 0.0)
+    o_su = ov.get("per_level_neighbour_setup_s", 0.0)
+    levels = pfmg_levels(layout)
     logp = math.ceil(math.log2(P)) if P > 1 else 0
+    dims = layout["fluid_dims"]
 
     def net(kind, r):
         return ks[kind]["messages"][r] * lat + ks[kind]["bytes"][r] / bw
@@ -105,26 +248,35 @@ def predict_layout(costs, layout, prof):
     for r in range(P):
         cells, parts = pr["cells"][r], pr["particles"][r]
         coupled = pr["proxies"][r] if indep else parts
-        fluid = cells * (costs["fluid_per_cell_step"] + iters * costs["pressure_per_cell_iteration"])
-        halo_p = pr["ghost_cells"][r] / 2 * 8  # one layer of p
-        pressure_net = iters * (2 * lat * logp + (2 * (6 * lat if P > 1 else 0) +
-                                                  2 * halo_p / bw))
+        nb = neighbours(dims, r) if P > 1 else 0
+        fluid = cells * costs["fluid_per_cell_step"] * f["fluid"]
+        psetup = setups * (cells * costs.get("pressure_setup_per_cell_step", 0.0) *
+                           f["pressure_setup"] + levels * nb * o_su)
+        psolve = iters * (cells * costs["pressure_per_cell_iteration"] * f["pressure_solve"] +
+                          levels * nb * o_it)
+        halo_p = pr["ghost_cells"][r] / 2 * 8  # one layer of p on the fine level
+        per_iter = ((levels * EXCH_PER_LEVEL + EXCH_PER_ITER) * nb * lat +
+                    ALLREDUCES_PER_ITER * lat * logp +
+                    2 * (EXCH_PER_LEVEL + EXCH_PER_ITER) * halo_p / bw)
+        pressure_net = iters * per_iter + setups * levels * EXCH_PER_SETUP_LEVEL * nb * lat
         fluid_net = net("fluid_halo", r) + net("coupling_halo", r) + pressure_net
-        dem = parts * sub * costs["dem_per_particle_substep"]
+        dem = parts * sub * costs["dem_per_particle_substep"] * f["dem"]
         dem_net = net("dem_ghost", r)
-        cpl = coupled * costs["coupling_per_particle_step"]
+        cpl = coupled * costs["coupling_per_particle_step"] * f["coupling"]
         inter = net("deposit_sum", r) + net("proxy", r)
         if indep:
             inter += ks["force_handover"]["bytes"][r] / prof["memory_Bps"]
-        rows.append((fluid + fluid_net, dem + dem_net, cpl, inter))
-    tot = [sum(x) for x in rows]
+        rows.append((fluid + psetup + psolve + fluid_net, dem + dem_net, cpl, inter,
+                     psetup + psolve + pressure_net))
+    tot = [sum(x[:4]) for x in rows]
     step = max(tot)
-    mean = [sum(x[i] for x in rows) / P for i in range(4)]
-    busy = sum(mean)
+    mean = [sum(x[i] for x in rows) / P for i in range(5)]
+    busy = sum(mean[:4])
     return {"strategy": layout["strategy"], "ranks": P, "step_s": step,
             "fluid": mean[0] / step, "dem": mean[1] / step, "coupling": mean[2] / step,
             "inter_physics": mean[3] / step, "wait": 1 - busy / step,
             "imbalance": step / busy if busy > 0 else 1.0,
+            "pressure": mean[4] / step, "memory_contention": c,
             "fluid_of_busy": mean[0] / busy, "dem_of_busy": mean[1] / busy,
             "coupling_of_busy": mean[2] / busy, "inter_physics_of_busy": mean[3] / busy}
 
@@ -136,39 +288,51 @@ def main():
     c.add_argument("report")
     c.add_argument("--busy", action="store_true",
                    help="fit thread-CPU (busy) times instead of wall: on a shared, loaded machine")
+    c.add_argument("--corun", help="report of the same 1-rank run beside bench_stream --co-run")
+    c.add_argument("--stream", help="bench_stream JSON (with --corun: the memory-bound shares)")
+    c.add_argument("--pfmg1", help="bench_fv --benchmark_format=json, BM_PressureSolve/n/0 "
+                   "on 1 rank")
+    c.add_argument("--pfmg2", help="the same on 2 ranks (hypre's per-level, per-neighbour cost)")
+    c.add_argument("--pingpong", help="latency the network model adds (taken off the overhead)")
     p = sp.add_parser("predict")
     p.add_argument("--costs", required=True)
     p.add_argument("--plan", required=True)
     p.add_argument("--profile", required=True)
+    p.add_argument("--stream", help="bench_stream JSON: this machine's memory contention")
     p.add_argument("--csv")
     p.add_argument("--png")
     p.add_argument("--title", default="")
     a = ap.parse_args()
     if a.cmd == "calibrate":
-        global KEY
-        if a.busy:
-            KEY = "busy_avg"
-        with open(a.report) as f:
-            json.dump(calibrate(json.load(f)), sys.stdout, indent=1)
+        def load(path):
+            if not path:
+                return None
+            with open(path) as f:
+                return json.load(f)
+        pp = load(a.pingpong)
+        costs = calibrate(load(a.report), "busy_avg" if a.busy else "avg", load(a.corun),
+                          load(a.stream), load(a.pfmg1), load(a.pfmg2),
+                          pp["latency_s"] if pp else 0.0)
+        json.dump(costs, sys.stdout, indent=1)
         print()
         return
     with open(a.costs) as f:
         costs = json.load(f)
     with open(a.plan) as f:
         plan = json.load(f)
-    prof = profile(a.profile)
+    stream = None
+    if a.stream:
+        with open(a.stream) as f:
+            stream = json.load(f)
+    prof = profile(a.profile, stream)
     out = [predict_layout(costs, L, prof) for L in plan["layouts"] if "error" not in L]
-    base = {}
-    for r in out:
-        if r["ranks"] == 1 or r["strategy"] not in base or r["ranks"] < base[r["strategy"]][0]:
-            base.setdefault(r["strategy"], (r["ranks"], r["step_s"] * r["ranks"]))
     # speedup against one rank's modelled time (the serial work: sum of the work of all ranks)
     serial = None
     for r in out:
         if r["ranks"] == 1:
             serial = r["step_s"]
     keys = ["strategy", "ranks", "step_s", "speedup", "fluid", "dem", "coupling", "inter_physics",
-            "wait", "imbalance", "fluid_of_busy", "dem_of_busy", "coupling_of_busy",
+            "wait", "imbalance", "pressure", "memory_contention", "fluid_of_busy", "dem_of_busy", "coupling_of_busy",
             "inter_physics_of_busy"]
     for r in out:
         r["speedup"] = serial / r["step_s"] if serial else float("nan")

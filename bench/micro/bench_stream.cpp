@@ -1,0 +1,119 @@
+// bench_stream: memory-bandwidth contention on one node, the memory term of
+// bench/scripts/model.py. STREAM triad a[i] = b[i] + s * c[i] (24 bytes an element, the STREAM
+// convention) on each rank's own arrays; for k = 1 .. size ranks streaming at once (the others
+// wait at the barrier) it measures the bandwidth ONE rank gets, best of --trials, at each
+// per-rank working set of --mib (total of the three arrays, MiB; default 3 and 192: in and far
+// beyond the L3 of this machine). The model takes contention(k) = B(1) / B(k) at the largest
+// size. With --json FILE it writes the table and /proc/loadavg.
+//   mpirun -n 2 build/bench/bench_stream --json bench/results/model/stream.json
+// --co-run SECONDS: one process streams (largest size) for SECONDS and exits: the co-runner of
+// the memory-share calibration (bench/scripts/model.py validate).
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+double triad(std::vector<double>& a, const std::vector<double>& b, const std::vector<double>& c,
+             int passes) {
+  const std::size_t n = a.size();
+  const double s = 1.0000001;
+  for (int p = 0; p < passes; ++p)
+    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
+  return a[n / 2];
+}
+
+std::string loadavg() {
+  std::ifstream f("/proc/loadavg");
+  std::string l;
+  std::getline(f, l);
+  return l;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  std::string json;
+  std::vector<double> mib;
+  int trials = 10;
+  double coRun = 0;
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::strcmp(argv[i], "--json") == 0) json = argv[i + 1];
+    if (std::strcmp(argv[i], "--mib") == 0) mib.push_back(std::atof(argv[i + 1]));
+    if (std::strcmp(argv[i], "--trials") == 0) trials = std::max(1, std::atoi(argv[i + 1]));
+    if (std::strcmp(argv[i], "--co-run") == 0) coRun = std::atof(argv[i + 1]);
+  }
+  if (mib.empty()) mib = {3.0, 192.0};
+  std::sort(mib.begin(), mib.end());
+  volatile double sink = 0;
+  if (coRun > 0) {
+    const std::size_t n = static_cast<std::size_t>(mib.back() * 1048576.0 / 24.0);
+    std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
+    const double t0 = MPI_Wtime();
+    while (MPI_Wtime() - t0 < coRun) sink = sink + triad(a, b, c, 1);
+    MPI_Finalize();
+    return 0;
+  }
+  // perRank[s][k-1]: bytes/s one rank gets at size s with k ranks streaming.
+  std::vector<std::vector<double>> perRank(mib.size(), std::vector<double>(size, 0.0));
+  for (std::size_t si = 0; si < mib.size(); ++si) {
+    const std::size_t n = static_cast<std::size_t>(mib[si] * 1048576.0 / 24.0);
+    std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
+    // about 0.1 s of streaming a trial at ~10 GB/s
+    const int passes = std::max(1, static_cast<int>(1.0e9 / (24.0 * static_cast<double>(n))));
+    sink = sink + triad(a, b, c, 1);  // first touch
+    for (int k = 1; k <= size; ++k) {
+      double best = 1e300;
+      for (int t = 0; t < trials; ++t) {
+        MPI_Barrier(MPI_COMM_WORLD);
+        const double t0 = MPI_Wtime();
+        if (rank < k) sink = sink + triad(a, b, c, passes);
+        double dt = rank < k ? MPI_Wtime() - t0 : 0.0, slowest = 0;
+        // the slowest streaming rank: a rank descheduled for part of the trial lets the others
+        // run alone and look faster; its own time is longer, so the max stays honest.
+        MPI_Allreduce(&dt, &slowest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        best = std::min(best, slowest);
+      }
+      perRank[si][k - 1] = 24.0 * static_cast<double>(n) * passes / best;
+    }
+  }
+  if (rank == 0) {
+    std::printf("%10s %8s %16s %16s %12s\n", "MiB/rank", "ranks", "GB/s one rank", "GB/s node",
+                "contention");
+    for (std::size_t si = 0; si < mib.size(); ++si)
+      for (int k = 1; k <= size; ++k)
+        std::printf("%10.1f %8d %16.3f %16.3f %12.3f\n", mib[si], k, perRank[si][k - 1] / 1e9,
+                    k * perRank[si][k - 1] / 1e9, perRank[si][0] / perRank[si][k - 1]);
+    std::printf("load: %s\n", loadavg().c_str());
+    if (!json.empty()) {
+      if (FILE* f = std::fopen(json.c_str(), "w")) {
+        std::fprintf(f, "{\n \"kernel\": \"triad, 24 B an element\",\n \"loadavg\": \"%s\",\n",
+                     loadavg().c_str());
+        std::fprintf(f, " \"ranks\": %d,\n \"sizes_mib\": [", size);
+        for (std::size_t si = 0; si < mib.size(); ++si)
+          std::fprintf(f, "%s%.1f", si ? ", " : "", mib[si]);
+        std::fprintf(f, "],\n \"per_rank_Bps\": [");
+        for (std::size_t si = 0; si < mib.size(); ++si) {
+          std::fprintf(f, "%s[", si ? ", " : "");
+          for (int k = 1; k <= size; ++k)
+            std::fprintf(f, "%s%.6e", k > 1 ? ", " : "", perRank[si][k - 1]);
+          std::fprintf(f, "]");
+        }
+        std::fprintf(f, "]\n}\n");
+        std::fclose(f);
+      }
+    }
+  }
+  MPI_Finalize();
+  return sink == 12345.678 ? 1 : 0;
+}

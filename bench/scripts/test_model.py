@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""Unit test of bench/scripts/model.py and validate_model.py on a tiny synthetic calibration
+(no MPI, no coloc run; deterministic). Every expected number is worked out by hand below; the
+test exits 1 on the first mismatch. CTest: model_unit (label unit)."""
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import model  # noqa: E402
+import validate_model  # noqa: E402
+
+FAILS = []
+
+
+def check(what, got, want, rel=1e-9):
+    if not (abs(got - want) <= rel * max(abs(want), 1e-300)):
+        FAILS.append("%s: got %.12g, want %.12g" % (what, got, want))
+
+
+def report(steps, group_s, ranks=1, busy_max=None, iters=2.0, setups=None):
+    """A report.json with the given per-group seconds (wall and busy alike)."""
+    tm = {}
+    for g, names in model.GROUPS.items():
+        for n in names[:1]:
+            tm[n] = {"avg": group_s.get(g, 0.0), "busy_avg": group_s.get(g, 0.0), "calls": steps}
+    total = sum(group_s.values())
+    return {"case": "synthetic", "config": {"domain": {"cells": [10, 10, 10]}},
+            "run": {"steps": steps, "dem_substeps": 0, "wall_s": total},
+            "particles": {"count": 100, "frozen": True},
+            "pressure": {"iterations_avg": iters, "setups": steps if setups is None else setups},
+            "timers": tm, "load": {"busy_s_max": busy_max if busy_max else total},
+            "fractions": {"fv": 0.9, "dem": 0.0, "coupling": 0.1, "inter_physics": 0.0,
+                          "wait": 0.0}}
+
+
+def layout(P):
+    cells = [1000 // P] * P
+    zero = {"bytes": [0] * P, "messages": [0] * P}
+    per_step = {k: dict(zero) for k in ("fluid_halo", "coupling_halo", "dem_ghost", "dem_migrate",
+                                        "deposit_sum", "proxy", "force_handover")}
+    return {"strategy": "uniform", "ranks": P, "fluid_dims": [P, 1, 1],
+            "fluid_cuts": [[0, 10] if P == 1 else [0, 5, 10], [0, 10], [0, 10]],
+            "dem_substeps_per_step": 0,
+            "per_rank": {"cells": cells, "particles": [100 // P] * P, "proxies": [0] * P,
+                         "ghost_cells": [0 if P == 1 else 200] * P, "per_step": per_step}}
+
+
+def main():
+    # --- contention: measured table, then extrapolation with the node's best total bandwidth
+    mem = {"per_rank_Bps": [10e9, 5e9], "ranks_per_node": 2}
+    check("c(1)", model.contention(mem, 1), 1.0)
+    check("c(2)", model.contention(mem, 2), 2.0)
+    check("c(4) extrapolated", model.contention(mem, 4), 10e9 * 4 / 10e9)
+    check("c(28) edr-ib", model.contention(model.PROFILES["edr-ib"]["memory"], 28), 12 * 28 / 110)
+    # --- geometry
+    check("neighbours 2x1x1 rank 0", model.neighbours([2, 1, 1], 0), 1)
+    check("neighbours 3x3x3 centre", model.neighbours([3, 3, 3], 13), 6)
+    check("neighbours 3x3x3 corner", model.neighbours([3, 3, 3], 0), 3)
+    check("PFMG levels 10^3", model.pfmg_levels(layout(2)), 1 + 3 * 4)
+
+    # --- calibration: 10 steps, 1000 cells; fluid 0.010 s, set-up 0.004 s, solve 0.002 s
+    # (2 iterations a step -> 20 iterations), coupling 0.001 s; with the co-runner fluid is 1.5x
+    # (m = 0.5 at c(2) = 2), the solve 2x (m = 1), coupling 1x (m = 0).
+    alone = {"fluid": 0.010, "pressure_setup": 0.004, "pressure_solve": 0.002, "coupling": 0.001}
+    co = {"fluid": 0.015, "pressure_setup": 0.004, "pressure_solve": 0.004, "coupling": 0.001}
+    stream = {"ranks": 2, "sizes_mib": [192.0], "per_rank_Bps": [[10e9, 5e9]]}
+    # bench_fv on a 16^3 cube (levels 1 + 3*4 = 13): 1 rank 1.0 ms an iteration, 2 ranks
+    # (solve m = 1: f = 2, so the per-cell part stays 1.0 ms) 1.0 ms + 13 x 10 us; set-up
+    # 10 ms / (f = 1) 5 ms + 13 x 20 us. Latency 1 us is taken off: o = 10 - 8 - 3/13 us.
+    def fv(ranks, it, su):
+        return {"benchmarks": [{"name": "BM_PressureSolve/16/0/iterations:3/manual_time",
+                                "run_type": "iteration", "iterations": 4, "time_unit": "ms",
+                                "real_time": 4 * it * 1e3, "cpu_time": 4 * it * 1e3,
+                                "cells": 4096, "ranks": ranks, "setup_s": su,
+                                "setup_cpu_s": su}]}
+    o_it, o_su = 10e-6, 20e-6
+    c = model.calibrate(report(10, alone), "busy_avg", report(10, co), stream,
+                        fv(1, 1e-3, 10e-3), fv(2, 1e-3 + 13 * o_it, 5e-3 + 13 * o_su), 1e-6)
+    check("fluid per cell-step", c["fluid_per_cell_step"], 0.010 / 10000)
+    check("setup per cell-step", c["pressure_setup_per_cell_step"], 0.004 / 10000)
+    check("solve per cell-iteration", c["pressure_per_cell_iteration"], 0.002 / 20000)
+    check("coupling per particle-step", c["coupling_per_particle_step"], 0.001 / 1000)
+    check("m fluid", c["memory_share"]["fluid"], 0.5)
+    check("m solve", c["memory_share"]["pressure_solve"], 1.0)
+    check("m setup", c["memory_share"]["pressure_setup"], 0.0)
+    check("m coupling", c["memory_share"]["coupling"], 0.0)
+    ov = c["pressure_overhead"]
+    check("overhead per iteration", ov["per_level_neighbour_iteration_s"],
+          o_it - 8e-6 - 3e-6 / 13)
+    check("overhead per set-up", ov["per_level_neighbour_setup_s"], o_su - 2e-6)
+
+    # --- prediction at 1 rank reproduces the calibration; at 2 ranks, by hand
+    prof = {"latency_s": 1e-6, "bandwidth_Bps": 1e9, "ranks_per_node": 1, "memory_Bps": 1e9,
+            "name": "t", "memory": mem}
+    p1 = model.predict_layout(c, layout(1), prof)
+    check("1 rank step", p1["step_s"], 0.0017)
+    p2 = model.predict_layout(c, layout(2), prof)
+    fluid = 500 * 1e-6 * 1.5
+    setup = 500 * 4e-7 + 13 * ov["per_level_neighbour_setup_s"] + 13 * 2 * 1e-6
+    halo_p = 100 * 8
+    solve = 2 * (500 * 1e-7 * 2 + 13 * ov["per_level_neighbour_iteration_s"] +
+                 (13 * 7 + 1) * 1e-6 + 3 * 1e-6 * 1 + 2 * 8 * halo_p / 1e9)
+    cpl = 50 * 1e-6
+    check("2 rank step", p2["step_s"], fluid + setup + solve + cpl)
+    check("2 rank coupling share", p2["coupling"], cpl / (fluid + setup + solve + cpl))
+    check("2 rank contention", p2["memory_contention"], 2.0)
+
+    # --- validate: a 2-rank point 5 % off passes, 25 % off fails (--strict exit code)
+    base = tempfile.mkdtemp(prefix="coloc-model-test-")
+    try:
+        for off, want_rc in ((1.05, 0), (1.25, 1)):
+            d = os.path.join(base, "x%.2f" % off)
+            os.makedirs(os.path.join(d, "synthetic", "plan"))
+            with open(os.path.join(d, "stream.json"), "w") as f:
+                json.dump(stream, f)
+            with open(os.path.join(d, "synthetic", "plan", "plan.json"), "w") as f:
+                json.dump({"layouts": [layout(1), layout(2)]}, f)
+            pp = os.path.join(d, "pingpong.json")
+            with open(pp, "w") as f:
+                json.dump({"latency_s": 1e-6, "bandwidth_Bps": 1e9}, f)
+            # no bench_fv files here: the overhead is 0; predicted 2-rank step by hand
+            want = (500 * 1e-6 * 1.5 + 500 * 4e-7 + 13 * 2 * 1e-6 +
+                    2 * (500 * 1e-7 * 2 + 92 * 1e-6 + 3e-6 + 16 * 800 / 1e9) + cpl)
+            two = {g: 0.0 for g in alone}
+            two["fluid"] = (want - cpl) * off * 10
+            two["coupling"] = cpl * off * 10
+            for k, r in (("np1-0", report(10, alone)), ("np1corun-0", report(10, co)),
+                         ("np2-0", report(10, two, ranks=2))):
+                os.makedirs(os.path.join(d, "synthetic", k))
+                with open(os.path.join(d, "synthetic", k, "report.json"), "w") as f:
+                    json.dump(r, f)
+            rc = subprocess.run([sys.executable, os.path.join(HERE, "validate_model.py"),
+                                 "--reports", d, "--cases", "synthetic.json", "--pingpong", pp,
+                                 "--out", os.path.join(d, "out"), "--strict"],
+                                capture_output=True, text=True)
+            if rc.returncode != want_rc:
+                FAILS.append("validate with the 2-rank point x%.2f: exit %d, want %d\n%s%s" %
+                             (off, rc.returncode, want_rc, rc.stdout, rc.stderr))
+            txt = open(os.path.join(d, "out", "validate-synthetic.txt")).read()
+            line = [x for x in txt.splitlines() if x.startswith("2 ") and "step_s" in x][0]
+            err = float(line.split()[4].rstrip("%"))
+            if abs(err - 100 * (1 / off - 1)) > 0.06:  # printed to 0.1 %
+                FAILS.append("validate step error x%.2f: %g %%" % (off, err))
+    finally:
+        shutil.rmtree(base)
+    if FAILS:
+        print("FAIL\n" + "\n".join(FAILS))
+        return 1
+    print("model.py: all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,268 @@
+#!/usr/bin/env python3
+"""Validate the performance model (bench/scripts/model.py) at 1 and 2 ranks on this machine.
+
+For each case (default case2-small and case3-small) it runs, --repeats times each:
+  np1        mpirun -n 1 coloc run CASE                      (the calibration)
+  np1corun   the same beside one `bench_stream --co-run`      (memory-bound shares)
+  np2        mpirun -n 2 coloc run CASE                      (the point to predict)
+and once: bench_stream on every core (memory contention), bench_fv BM_PressureSolve/{32,64}/0
+on 1 and 2 ranks (hypre's per-level overhead), `coloc plan CASE --ranks 1,2`. It takes the
+median run of each set (--pick min for the fastest), calibrates from the 1-rank runs ONLY (the
+2-rank runs are never fitted), predicts 1 and 2 ranks with the measured ping-pong and stream
+profile and prints, per point, the model and measured step time and shares (fluid, DEM,
+coupling, inter-physics, wait) with their errors, PASS/FAIL against 15 % (a share: 15 % of the
+measured share, or 1.5 points where that is larger). `uptime` is recorded before and after.
+Writes OUT/validate-CASE.{csv,txt} and OUT/validate-costs-CASE.json.
+
+  bench/scripts/validate_model.py                      # runs everything (a few minutes, quiet)
+  bench/scripts/validate_model.py --reports DIR        # takes DIR's reports, runs nothing
+  --timer busy|wall   busy (thread-CPU; default, for a loaded machine) or wall (a quiet one)
+
+DIR layout (what a run leaves under --runs): stream.json, pfmg-np1.json, pfmg-np2.json,
+CASE/plan/plan.json, CASE/{np1,np1corun,np2}-I/report.json.
+"""
+import argparse
+import glob
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import model  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+TOL = 0.15
+SHARE_FLOOR = 0.015
+SHARES = ["fluid", "dem", "coupling", "inter_physics", "wait"]
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_mpi_yield_when_idle": "1",
+           "OMPI_MCA_btl_vader_single_copy_mechanism": "none"}
+
+
+def uptime():
+    try:
+        return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    except OSError:
+        with open("/proc/loadavg") as f:
+            return "loadavg " + f.read().strip()
+
+
+def sh(cmd, log):
+    with open(log, "w") as f:
+        subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, check=True)
+
+
+def mpirun(n):
+    return ["mpirun", "-n", str(n), "--bind-to", "none"]
+
+
+def run_all(a, runs):
+    os.environ.update({k: v for k, v in MPI_ENV.items() if k not in os.environ})
+    os.makedirs(runs, exist_ok=True)
+    bench = a.bench
+    ncores = a.stream_ranks or os.cpu_count() or 2
+    print("measuring the memory contention (bench_stream on %d ranks) ..." % ncores, flush=True)
+    sh(mpirun(ncores) + [os.path.join(bench, "bench_stream"), "--json",
+                         os.path.join(runs, "stream.json")], os.path.join(runs, "stream.log"))
+    fv = os.path.join(bench, "bench_fv")
+    if os.path.exists(fv):
+        for n in (1, 2):
+            print("measuring the pressure solve on %d rank(s) (bench_fv) ..." % n, flush=True)
+            sh(mpirun(n) + [fv, "--benchmark_filter=BM_PressureSolve/(32|64)/0/",
+                            "--benchmark_format=json",
+                            "--benchmark_out=" + os.path.join(runs, "pfmg-np%d.json" % n)],
+               os.path.join(runs, "pfmg-np%d.log" % n))
+    for case in a.cases:
+        name = os.path.splitext(os.path.basename(case))[0]
+        d = os.path.join(runs, name)
+        os.makedirs(d, exist_ok=True)
+        sh([a.coloc, "plan", case, "--ranks", "1,2", "--strategy", "uniform", "--out",
+            os.path.join(d, "plan")], os.path.join(d, "plan.log"))
+        extra = ["--set", "run.steps=%d" % a.steps] if a.steps else []
+        for i in range(a.repeats):
+            for kind in ("np1", "np1corun", "np2"):
+                out = os.path.join(d, "%s-%d" % (kind, i))
+                print("%s %s %d/%d  (%s)" % (name, kind, i + 1, a.repeats, uptime()), flush=True)
+                cmd = mpirun(2 if kind == "np2" else 1) + [a.coloc, "run", case, "--out", out] + extra
+                co = None
+                if kind == "np1corun":
+                    co = subprocess.Popen(mpirun(1) + [os.path.join(bench, "bench_stream"),
+                                                       "--co-run", "3600"],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                          start_new_session=True)
+                    time.sleep(1.0)  # its arrays are allocated and streaming
+                try:
+                    sh(cmd, out + ".log")
+                finally:
+                    if co is not None:
+                        os.killpg(co.pid, signal.SIGTERM)
+                        co.wait()
+
+
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def steps_of(r):
+    return r["run"]["steps"] - r["run"].get("first_step", 0)
+
+
+def busy_step(r):
+    """The slowest rank's thread-CPU time of a step: its compute phases plus the mean of the
+    exchange phases (they are not in load.busy_s_max)."""
+    tm = r["timers"]
+    ex = sum(tm.get(k, {}).get("busy_avg", 0.0) for k in
+             ("fluid_halo", "dem_ghost", "dem_migrate", "exchange_local", "exchange_remote"))
+    return (r["load"]["busy_s_max"] + ex) / steps_of(r)
+
+
+def step_time(r, timer):
+    return busy_step(r) if timer == "busy" else r["run"]["wall_s"] / steps_of(r)
+
+
+def pick(reports, timer, how):
+    rs = sorted(reports, key=lambda r: step_time(r, timer))
+    return rs[0] if how == "min" else rs[(len(rs) - 1) // 2]
+
+
+def measured_shares(r, timer):
+    if timer == "wall":
+        f = r["fractions"]
+        return {"fluid": f["fv"], "dem": f["dem"], "coupling": f["coupling"],
+                "inter_physics": f["inter_physics"], "wait": f["wait"]}
+    tm = r["timers"]
+
+    def b(names):
+        return sum(tm.get(k, {}).get("busy_avg", 0.0) for k in names) / steps_of(r)
+
+    st = busy_step(r)
+    out = {"fluid": b(sum([model.GROUPS[g] for g in ("fluid", "pressure_setup", "pressure_solve")],
+                          []) + ["fluid_halo"]),
+           "dem": b(model.GROUPS["dem"] + ["dem_ghost", "dem_migrate"]),
+           "coupling": b(model.GROUPS["coupling"]),
+           "inter_physics": b(["exchange_local", "exchange_remote"])}
+    out = {k: v / st for k, v in out.items()}
+    out["wait"] = max(0.0, 1.0 - sum(out.values()))
+    return out
+
+
+def verdict(q, model_v, meas):
+    if q == "step_s":
+        err = (model_v - meas) / meas if meas > 0 else float("inf")
+        return err, abs(err) <= TOL
+    err = model_v - meas  # points
+    return err, abs(err) <= max(TOL * meas, SHARE_FLOOR)
+
+
+def validate_case(a, runs, case, out_dir):
+    name = os.path.splitext(os.path.basename(case))[0]
+    d = os.path.join(runs, name)
+    rep = {k: [load(p) for p in sorted(glob.glob(os.path.join(d, k + "-*", "report.json")))]
+           for k in ("np1", "np1corun", "np2")}
+    if not rep["np1"] or not rep["np2"]:
+        raise SystemExit("validate_model: no np1/np2 reports under " + d)
+    key = "busy_avg" if a.timer == "busy" else "avg"
+    np1 = pick(rep["np1"], a.timer, a.pick)
+    corun = pick(rep["np1corun"], a.timer, a.pick) if rep["np1corun"] else None
+    stream = load(os.path.join(runs, "stream.json"))
+    pp = load(a.pingpong)
+    p1 = os.path.join(runs, "pfmg-np1.json")
+    p2 = os.path.join(runs, "pfmg-np2.json")
+    have_fv = os.path.exists(p1) and os.path.exists(p2)
+    costs = model.calibrate(np1, key, corun, stream, load(p1) if have_fv else None,
+                            load(p2) if have_fv else None, pp["latency_s"])
+    prof = model.profile(a.pingpong, stream)
+    plan = load(os.path.join(d, "plan", "plan.json"))
+    rows, lines = [], []
+    lines.append("MODEL VALIDATION %s, timer %s, %d repeat(s), %s run of each, calibrated on 1 rank"
+                 % (name, a.timer, len(rep["np1"]), a.pick))
+    lines.append("load during the runs: %s" % a.load_note)
+    lines.append("memory: contention c(2) = %.3f (bench_stream, %.0f MiB a rank), memory-bound "
+                 "shares %s" % (model.contention(prof["memory"], 2), prof["memory"]["size_mib"],
+                                ", ".join("%s %.2f" % kv for kv in costs["memory_share"].items())))
+    ov = costs["pressure_overhead"]
+    lines.append("pressure: %.2f PCG iterations a step (1 rank), %.2f set-ups a step; hypre "
+                 "overhead per level and neighbour %.3g s an iteration, %.3g s a set-up"
+                 % (costs["pressure_iterations_per_step"], costs["pressure_setups_per_step"],
+                    ov["per_level_neighbour_iteration_s"], ov["per_level_neighbour_setup_s"]))
+    lines.append("%-6s %-14s %11s %11s %9s  %s" % ("ranks", "quantity", "model", "measured",
+                                                  "error", "verdict"))
+    ok_all = True
+    for P, reports in ((1, rep["np1"]), (2, rep["np2"])):
+        meas = pick(reports, a.timer, a.pick)
+        lay = [L for L in plan["layouts"] if L["ranks"] == P and L["strategy"] == "uniform"][0]
+        m = model.predict_layout(costs, lay, prof)
+        ms = measured_shares(meas, a.timer)
+        mm = {k: m[k] for k in SHARES}  # both: fractions of the slowest rank's step
+        its = meas.get("pressure", {}).get("iterations_avg", 0.0)
+        quantities = [("step_s", m["step_s"], step_time(meas, a.timer))]
+        quantities += [(k, mm[k], ms[k]) for k in SHARES]
+        for q, mv, xv in quantities:
+            err, ok = verdict(q, mv, xv)
+            fitted = P == 1
+            tag = "(fitted)" if fitted else ("PASS" if ok else "FAIL")
+            if not fitted:
+                ok_all = ok_all and ok
+            rows.append([name, P, a.timer, q, mv, xv, err, tag])
+            if q == "step_s":
+                lines.append("%-6d %-14s %11.5f %11.5f %+8.1f%%  %s" % (P, q, mv, xv, 100 * err, tag))
+            else:
+                lines.append("%-6d %-14s %10.1f%% %10.1f%% %+7.1fpt  %s" % (P, q, 100 * mv, 100 * xv,
+                                                                          100 * err, tag))
+        lines.append("%-6d %-14s %11s %11.2f   (measured PCG iterations a step; the model uses "
+                     "the 1-rank count %.2f)" % (P, "iterations", "", its,
+                                                costs["pressure_iterations_per_step"]))
+    lines.append("%s at 2 ranks: %s" % (name, "PASS" if ok_all else "FAIL"))
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "validate-%s.csv" % name), "w") as f:
+        f.write("# MODEL VALIDATION (bench/scripts/validate_model.py); load: %s\n" % a.load_note)
+        f.write("case,ranks,timer,quantity,model,measured,error,verdict\n")
+        for r in rows:
+            f.write("%s,%d,%s,%s,%.6g,%.6g,%.6g,%s\n" % tuple(r))
+    with open(os.path.join(out_dir, "validate-%s.txt" % name), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    with open(os.path.join(out_dir, "validate-costs-%s.json" % name), "w") as f:
+        json.dump(costs, f, indent=1)
+    print("\n".join(lines), flush=True)
+    return ok_all
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--cases", nargs="+", default=[os.path.join(ROOT, "bench/cases/case2-small.json"),
+                                                   os.path.join(ROOT, "bench/cases/case3-small.json")])
+    ap.add_argument("--coloc", default=os.path.join(ROOT, "build/coloc"))
+    ap.add_argument("--bench", default=os.path.join(ROOT, "build/bench"))
+    ap.add_argument("--pingpong", default=os.path.join(ROOT, "bench/results/model/pingpong.json"))
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--steps", type=int, default=0, help="override run.steps (0: the case's)")
+    ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
+    ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
+    ap.add_argument("--pick", choices=["median", "min"], default="median")
+    ap.add_argument("--runs", default="/tmp/coloc-validate")
+    ap.add_argument("--reports", help="take the reports under this folder; run nothing")
+    ap.add_argument("--out", default=os.path.join(ROOT, "bench/results/model"))
+    ap.add_argument("--strict", action="store_true", help="exit 1 when a 2-rank point fails")
+    a = ap.parse_args()
+    before = uptime()
+    runs = a.reports or a.runs
+    if not a.reports:
+        run_all(a, runs)
+        a.load_note = "before: %s; after: %s" % (before, uptime())
+        with open(os.path.join(runs, "load.txt"), "w") as f:
+            f.write(a.load_note + "\n")
+    else:
+        note = os.path.join(runs, "load.txt")
+        a.load_note = open(note).read().strip() if os.path.exists(note) else "(given reports)"
+    ok = all([validate_case(a, runs, c, a.out) for c in a.cases])
+    print("validation at 2 ranks: %s" % ("PASS" if ok else "FAIL"))
+    sys.exit(0 if ok or not a.strict else 1)
+
+
+if __name__ == "__main__":
+    main()
