@@ -7,7 +7,7 @@ For each case (default case2-small and case3-small) it runs, --repeats times eac
   np2        mpirun -n 2 coloc run CASE                      (the point to predict)
 and once: bench_stream on every core (memory contention), bench_fv BM_PressureSolve/{32,64}/0
 on 1 and 2 ranks (hypre's per-level overhead), `coloc plan CASE --ranks 1,2`. It takes the
-median run of each set (--pick min for the fastest), calibrates from the 1-rank runs ONLY (the
+fastest run of each set (the least disturbed; --pick median), calibrates from the 1-rank runs ONLY (the
 2-rank runs are never fitted), predicts 1 and 2 ranks with the measured ping-pong and stream
 profile and prints, per point, the model and measured step time and shares (fluid, DEM,
 coupling, inter-physics, wait) with their errors, PASS/FAIL against 15 % (a share: 15 % of the
@@ -90,8 +90,9 @@ def run_all(a, runs):
                 cmd = mpirun(2 if kind == "np2" else 1) + [a.coloc, "run", case, "--out", out] + extra
                 co = None
                 if kind == "np1corun":
+                    mib = model.stream_memory(load(os.path.join(runs, "stream.json")))["size_mib"]
                     co = subprocess.Popen(mpirun(1) + [os.path.join(bench, "bench_stream"),
-                                                       "--co-run", "3600"],
+                                                       "--co-run", "3600", "--mib", str(mib)],
                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                           start_new_session=True)
                     time.sleep(1.0)  # its arrays are allocated and streaming
@@ -243,7 +244,8 @@ def main():
     ap.add_argument("--steps", type=int, default=0, help="override run.steps (0: the case's)")
     ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
     ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
-    ap.add_argument("--pick", choices=["median", "min"], default="median")
+    ap.add_argument("--pick", choices=["min", "median"], default="min",
+                    help="the fastest run of each set (least disturbed by other jobs) or the median")
     ap.add_argument("--runs", default="/tmp/coloc-validate")
     ap.add_argument("--reports", help="take the reports under this folder; run nothing")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench/results/model"))
