@@ -53,7 +53,7 @@ def uptime():
 
 def sh(cmd, log):
     with open(log, "w") as f:
-        subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, check=True)
+        subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, check=True, cwd=ROOT)
 
 
 def mpirun(n):
@@ -94,7 +94,7 @@ def run_all(a, runs):
                     co = subprocess.Popen(mpirun(1) + [os.path.join(bench, "bench_stream"),
                                                        "--co-run", "3600", "--mib", str(mib)],
                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                          start_new_session=True)
+                                          start_new_session=True, cwd=ROOT)
                     time.sleep(1.0)  # its arrays are allocated and streaming
                 try:
                     sh(cmd, out + ".log")
@@ -177,6 +177,9 @@ def validate_case(a, runs, case, out_dir):
     have_fv = os.path.exists(p1) and os.path.exists(p2)
     costs = model.calibrate(np1, key, corun, stream, load(p1) if have_fv else None,
                             load(p2) if have_fv else None, pp["latency_s"])
+    src = costs["source"]
+    if os.path.isabs(src) and "/bench/cases/" in src:  # reports of runs made from a checkout
+        costs["source"] = "bench/cases/" + src.split("/bench/cases/")[-1]
     prof = model.profile(a.pingpong, stream)
     plan = load(os.path.join(d, "plan", "plan.json"))
     rows, lines = [], []
@@ -235,8 +238,9 @@ def validate_case(a, runs, case, out_dir):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--cases", nargs="+", default=[os.path.join(ROOT, "bench/cases/case2-small.json"),
-                                                   os.path.join(ROOT, "bench/cases/case3-small.json")])
+    ap.add_argument("--cases", nargs="+", default=["bench/cases/case2-small.json",
+                                                   "bench/cases/case3-small.json"],
+                    help="relative to the repository root (runs start there)")
     ap.add_argument("--coloc", default=os.path.join(ROOT, "build/coloc"))
     ap.add_argument("--bench", default=os.path.join(ROOT, "build/bench"))
     ap.add_argument("--pingpong", default=os.path.join(ROOT, "bench/results/model/pingpong.json"))
@@ -252,7 +256,8 @@ def main():
     ap.add_argument("--strict", action="store_true", help="exit 1 when a 2-rank point fails")
     a = ap.parse_args()
     before = uptime()
-    runs = a.reports or a.runs
+    runs = os.path.abspath(a.reports or a.runs)
+    a.coloc, a.bench, a.pingpong = (os.path.abspath(x) for x in (a.coloc, a.bench, a.pingpong))
     if not a.reports:
         run_all(a, runs)
         a.load_note = "before: %s; after: %s" % (before, uptime())
