@@ -73,21 +73,23 @@ def run_all(a, runs):
         for n in (1, 2):
             print("measuring the pressure solve on %d rank(s) (bench_fv) ..." % n, flush=True)
             sh(mpirun(n) + [fv, "--benchmark_filter=BM_PressureSolve/(32|64)/0/",
-                            "--benchmark_format=json",
+                            "--benchmark_format=json", "--benchmark_repetitions=%d" % a.repeats,
                             "--benchmark_out=" + os.path.join(runs, "pfmg-np%d.json" % n)],
                os.path.join(runs, "pfmg-np%d.log" % n))
     for case in a.cases:
         name = os.path.splitext(os.path.basename(case))[0]
         d = os.path.join(runs, name)
         os.makedirs(d, exist_ok=True)
-        sh([a.coloc, "plan", case, "--ranks", "1,2", "--strategy", "uniform", "--out",
+        sh([a.coloc, "plan", case, "--ranks", ",".join(str(P) for P in [1] + a.ranks),
+            "--strategy", "uniform", "--out",
             os.path.join(d, "plan")], os.path.join(d, "plan.log"))
         extra = ["--set", "run.steps=%d" % a.steps] if a.steps else []
         for i in range(a.repeats):
-            for kind in ("np1", "np1corun", "np2"):
+            for kind in ["np1", "np1corun"] + ["np%d" % P for P in a.ranks]:
                 out = os.path.join(d, "%s-%d" % (kind, i))
                 print("%s %s %d/%d  (%s)" % (name, kind, i + 1, a.repeats, uptime()), flush=True)
-                cmd = mpirun(2 if kind == "np2" else 1) + [a.coloc, "run", case, "--out", out] + extra
+                nr = 1 if kind.startswith("np1") else int(kind[2:])
+                cmd = mpirun(nr) + [a.coloc, "run", case, "--out", out] + extra
                 co = None
                 if kind == "np1corun":
                     mib = model.stream_memory(load(os.path.join(runs, "stream.json")))["size_mib"]
@@ -164,9 +166,10 @@ def validate_case(a, runs, case, out_dir):
     name = os.path.splitext(os.path.basename(case))[0]
     d = os.path.join(runs, name)
     rep = {k: [load(p) for p in sorted(glob.glob(os.path.join(d, k + "-*", "report.json")))]
-           for k in ("np1", "np1corun", "np2")}
-    if not rep["np1"] or not rep["np2"]:
-        raise SystemExit("validate_model: no np1/np2 reports under " + d)
+           for k in ["np1", "np1corun"] + ["np%d" % P for P in a.ranks]}
+    if not all(rep["np%d" % P] for P in [1] + a.ranks):
+        raise SystemExit("validate_model: missing np1 or np%s reports under %s" %
+                         ("/np".join(str(P) for P in a.ranks), d))
     key = "busy_avg" if a.timer == "busy" else "avg"
     np1 = pick(rep["np1"], a.timer, a.pick)
     corun = pick(rep["np1corun"], a.timer, a.pick) if rep["np1corun"] else None
@@ -197,7 +200,8 @@ def validate_case(a, runs, case, out_dir):
     lines.append("%-6s %-14s %11s %11s %9s  %s" % ("ranks", "quantity", "model", "measured",
                                                   "error", "verdict"))
     ok_all = True
-    for P, reports in ((1, rep["np1"]), (2, rep["np2"])):
+    for P in [1] + a.ranks:
+        reports = rep["np%d" % P]
         meas = pick(reports, a.timer, a.pick)
         lay = [L for L in plan["layouts"] if L["ranks"] == P and L["strategy"] == "uniform"][0]
         m = model.predict_layout(costs, lay, prof)
@@ -221,7 +225,8 @@ def validate_case(a, runs, case, out_dir):
         lines.append("%-6d %-14s %11s %11.2f   (measured PCG iterations a step; the model uses "
                      "the 1-rank count %.2f)" % (P, "iterations", "", its,
                                                 costs["pressure_iterations_per_step"]))
-    lines.append("%s at 2 ranks: %s" % (name, "PASS" if ok_all else "FAIL"))
+    lines.append("%s at %s ranks: %s" % (name, ",".join(map(str, a.ranks)),
+                                         "PASS" if ok_all else "FAIL"))
     os.makedirs(out_dir, exist_ok=True)
     with open(os.path.join(out_dir, "validate-%s.csv" % name), "w") as f:
         f.write("# MODEL VALIDATION (bench/scripts/validate_model.py); load: %s\n" % a.load_note)
@@ -245,6 +250,8 @@ def main():
     ap.add_argument("--bench", default=os.path.join(ROOT, "build/bench"))
     ap.add_argument("--pingpong", default=os.path.join(ROOT, "bench/results/model/pingpong.json"))
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--ranks", default="2", help="rank counts to predict, e.g. 2,4,8,16 (1 is "
+                    "always run: the calibration)")
     ap.add_argument("--steps", type=int, default=0, help="override run.steps (0: the case's)")
     ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
     ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
@@ -255,6 +262,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "bench/results/model"))
     ap.add_argument("--strict", action="store_true", help="exit 1 when a 2-rank point fails")
     a = ap.parse_args()
+    a.ranks = [int(x) for x in a.ranks.split(",") if int(x) > 1]
     before = uptime()
     runs = os.path.abspath(a.reports or a.runs)
     a.coloc, a.bench, a.pingpong = (os.path.abspath(x) for x in (a.coloc, a.bench, a.pingpong))
@@ -267,7 +275,7 @@ def main():
         note = os.path.join(runs, "load.txt")
         a.load_note = open(note).read().strip() if os.path.exists(note) else "(given reports)"
     ok = all([validate_case(a, runs, c, a.out) for c in a.cases])
-    print("validation at 2 ranks: %s" % ("PASS" if ok else "FAIL"))
+    print("validation at %s ranks: %s" % (",".join(map(str, a.ranks)), "PASS" if ok else "FAIL"))
     sys.exit(0 if ok or not a.strict else 1)
 
 
