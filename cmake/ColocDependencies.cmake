@@ -1,4 +1,4 @@
-# Every dependency through find_package (see docs/ and ../shared/TOOLCHAIN.md).
+# Every dependency through find_package (the Debian packages: cmake/setup.sh; README.md).
 find_package(MPI REQUIRED COMPONENTS C CXX)
 set(HDF5_PREFER_PARALLEL ON)
 find_package(HDF5 REQUIRED COMPONENTS C)

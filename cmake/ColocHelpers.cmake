@@ -1,8 +1,10 @@
 # Helpers shared by the folders.
 
-# Environment every MPI launch in CTest gets: mpirun as root, more ranks than cores.
+# Environment every MPI launch in CTest gets: mpirun as root, more ranks than cores, and a rank
+# waiting in MPI yields its core (tests oversubscribe a 2-core machine; README.md).
 set(COLOC_MPI_ENV OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-    OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl_vader_single_copy_mechanism=none)
+    OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_mpi_yield_when_idle=1
+    OMPI_MCA_btl_vader_single_copy_mechanism=none)
 
 # coloc_add_library(name SOURCES ... DEPS ...): a folder's library with its public include/.
 function(coloc_add_library name)

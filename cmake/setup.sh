@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # cmake/setup.sh [BUILD_DIR] [extra cmake args...]
-# Installs the Debian packages coloc needs (only those missing), then configures and builds.
+# Installs the Debian packages coloc needs (only those missing; clang-format for the style check of
+# tests/run.sh), then configures and builds.
 # Idempotent: with everything installed and built it takes a few seconds.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -9,7 +10,8 @@ shift || true
 
 packages=(cmake ninja-build g++ pkg-config openmpi-bin libopenmpi-dev libhypre-dev
           libhdf5-openmpi-dev hdf5-tools libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
-          nlohmann-json3-dev libcli11-dev python3-matplotlib python3-numpy python3-h5py)
+          nlohmann-json3-dev libcli11-dev python3-matplotlib python3-numpy python3-h5py
+          clang-format)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -25,7 +27,9 @@ fi
 # mpirun as root and with more ranks than cores (containers, CI).
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 
-if [[ ! -f $build/build.ninja ]]; then
+# Configure a new build folder; an existing one only when options are given (e.g. tests/run.sh's
+# -DCOLOC_WERROR=ON), which then stay in its cache.
+if [[ ! -f $build/build.ninja || $# -gt 0 ]]; then
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
         -DPython3_EXECUTABLE=/usr/bin/python3 "$@" >/dev/null
 fi

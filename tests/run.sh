@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
-# tests/run.sh — install what is missing, build, and run every test through CTest; then the
-# unit, MPI and I/O tests again under AddressSanitizer + UndefinedBehaviorSanitizer (a second
-# build in build-sanitize; COLOC_SANITIZE=0 skips it).
+# tests/run.sh — what CI runs (.ci/run): install what is missing, build with warnings as errors
+# (-DCOLOC_WERROR=ON), check the C++ style against .clang-format (cmake/format.sh; --fix repairs
+# it), and run every test through CTest; then the unit, MPI and I/O tests again under
+# AddressSanitizer + UndefinedBehaviorSanitizer (a second build in build-sanitize;
+# COLOC_SANITIZE=0 skips it). clang-tidy is not run here (too slow for every push): CONTRIBUTING.md.
 # Extra arguments go to the first ctest run (e.g. -L validation, -R halo).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${COLOC_BUILD_DIR:-$root/build}
-"$root/cmake/setup.sh" "$build"
+"$root/cmake/setup.sh" "$build" -DCOLOC_WERROR=ON
+"$root/cmake/format.sh"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-export OMPI_MCA_btl_vader_single_copy_mechanism=none
+export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
 (cd "$build" && ctest --output-on-failure -j "$(nproc)" "$@")
 
 if [[ ${COLOC_SANITIZE:-1} != 0 && $# -eq 0 ]]; then

@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "coloc/partition/h5io.hpp"
+#include "coloc/io/h5io.hpp"
 
 namespace {
 

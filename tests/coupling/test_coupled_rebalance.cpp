@@ -137,7 +137,9 @@ TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
         std::printf("re-balanced at step %lld: modelled imbalance %.3f -> %.3f, %d sliding pairs\n",
                     steps, plan.currentImbalance, plan.newImbalance, pairs);
     }
-    if (world.size() > 1) EXPECT_GE(moves, 1);
+    if (world.size() > 1) {
+      EXPECT_GE(moves, 1);
+    }
     EXPECT_FALSE(std::filesystem::exists(scratch));
     const auto a = trajectories(*sim), b = trajectories(ser);
     double vmax = 0;

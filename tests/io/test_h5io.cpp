@@ -9,8 +9,8 @@
 #include <fstream>
 
 #include "coloc/core/error.hpp"
-#include "coloc/partition/h5io.hpp"
-#include "coloc/partition/output.hpp"
+#include "coloc/io/h5io.hpp"
+#include "coloc/io/output.hpp"
 
 using namespace coloc;
 namespace fs = std::filesystem;

@@ -12,7 +12,7 @@
 #include <filesystem>
 
 #include "coloc/core/error.hpp"
-#include "coloc/partition/output.hpp"
+#include "coloc/io/output.hpp"
 
 int main(int argc, char** argv) {
   using namespace coloc;

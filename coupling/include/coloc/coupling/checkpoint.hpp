@@ -1,5 +1,5 @@
 // coloc/coupling/checkpoint.hpp — restart checkpoints: the complete state of a Simulation in ONE
-// parallel HDF5 file (collective I/O through partition/h5io.hpp), readable on any decomposition
+// parallel HDF5 file (collective I/O through io/h5io.hpp), readable on any decomposition
 // of the same grid (docs/output.md, "Checkpoints and restart").
 //
 //   /                     attributes format "coloc-checkpoint", version, status ("ok" |
@@ -25,8 +25,8 @@
 #include "coloc/core/run_config.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
+#include "coloc/io/h5io.hpp"
 #include "coloc/partition/decomposition.hpp"
-#include "coloc/partition/h5io.hpp"
 
 namespace coloc::coupling {
 

@@ -58,10 +58,10 @@
 #include "coloc/coupling/kernel.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
+#include "coloc/io/output.hpp"
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/halo.hpp"
-#include "coloc/partition/output.hpp"
 #include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {

@@ -1,5 +1,5 @@
-// coloc/partition/h5io.hpp — parallel HDF5 (MPI-IO driver, collective transfers) for fields and
-// particles, and the XDMF index that lets ParaView open a series of such files.
+// coloc/io/h5io.hpp — parallel HDF5 (MPI-IO driver, collective transfers) for fields and
+// particles. The XDMF index that lets ParaView open a series of such files: coloc/io/xdmf.hpp.
 //
 // Every function here is COLLECTIVE over the communicator of the file: all its ranks call it,
 // in the same order, with the same paths and names (the data differ). Failures (a file that
@@ -143,48 +143,5 @@ template <class T>
 std::vector<T> readParticleArray(H5File& file, const std::string& path, const RowRange& rows);
 std::array<std::vector<double>, 3> readParticleVec3(H5File& file, const std::string& path,
                                                     const RowRange& rows);
-
-// ---- XDMF: one .xmf per series, a temporal collection of every output --------------------------
-
-struct XdmfAttribute {
-  std::string name;
-  bool vector = false;               // 3 components (last dataset axis)
-  std::string dataset;               // path inside the step's file, e.g. "/p"
-  std::string numberType = "Float";  // Float | Int
-  int precision = 8;                 // bytes
-};
-
-struct XdmfStep {
-  double time = 0;
-  long long step = 0;
-  std::string file;      // HDF5 file, relative to the .xmf
-  long long count = 0;   // particles of this step (particle series)
-  std::string geometry;  // dataset of the [N][3] positions (particle series)
-  std::vector<XdmfAttribute> attributes;
-  std::string connectivity;  // dataset of the [N] vertex indices 0..N-1 (particle series)
-};
-
-class XdmfSeries {
- public:
-  /// Cell data on the grid: 3DCoRectMesh, Center="Cell".
-  static XdmfSeries cells(std::string name, const GlobalGrid& grid);
-  /// Particles: Polyvertex topology of N one-point cells (explicit connectivity), XYZ geometry,
-  /// Center="Node".
-  static XdmfSeries particles(std::string name);
-
-  /// Append a step; entries with step >= s.step are dropped first (a rewritten or restarted
-  /// series stays ordered in time).
-  void add(XdmfStep s);
-  const std::vector<XdmfStep>& steps() const { return steps_; }
-  std::string xml() const;
-  /// Rank 0 writes `path` (through path.tmp and a rename). Collective: errors on every rank.
-  void write(const Comm& comm, const std::string& path) const;
-
- private:
-  std::string name_;
-  bool particles_ = false;
-  GlobalGrid grid_;
-  std::vector<XdmfStep> steps_;
-};
 
 }  // namespace coloc

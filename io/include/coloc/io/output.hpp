@@ -1,4 +1,4 @@
-// coloc/partition/output.hpp — periodic output of a run: fluid fields and particles to parallel
+// coloc/io/output.hpp — periodic output of a run: fluid fields and particles to parallel
 // HDF5, one file per output time, and one XDMF index per series for ParaView (docs/output.md).
 //
 //   DIR/fields_NNNNNN.h5      one dataset per field: scalar [nz][ny][nx], vector [nz][ny][nx][3]
@@ -25,7 +25,9 @@
 #include <vector>
 
 #include "coloc/core/config.hpp"
-#include "coloc/partition/h5io.hpp"
+#include "coloc/io/checkpoint_file.hpp"
+#include "coloc/io/h5io.hpp"
+#include "coloc/io/xdmf.hpp"
 
 namespace coloc {
 
@@ -36,29 +38,11 @@ struct OutputOptions {
   std::string dir = ".";
 };
 
-/// Restart checkpoints (coupling/checkpoint.hpp writes them).
-struct CheckpointOptions {
-  long long intervalSteps = 0;  // 0: none
-  std::string path;             // the checkpoint file (output.dir / output.checkpoint_file)
-  bool onFailure = true;        // write failedCheckpointPath(path) when the run fails
-  bool due(long long step) const {
-    return intervalSteps > 0 && step > 0 && step % intervalSteps == 0;
-  }
-  /// The file of the checkpoint at `step`: path with "{step}" replaced by the zero-padded step
-  /// (6 digits), e.g. "ck_{step}.h5" -> "ck_000120.h5"; path itself without the placeholder.
-  std::string pathAt(long long step) const;
-};
-
-/// output.{interval_steps,fields,particles,dir,checkpoint_interval,checkpoint_file,
-/// checkpoint_on_failure}.
+/// output.{interval_steps,fields,particles,dir,series_*,diagnostics_interval,snapshot} and the
+/// checkpoint keys output.checkpoint_{interval,file,on_failure} (coloc/io/checkpoint_file.hpp).
 void declareOutputConfig(Schema& s);
 /// The options of a case; output.dir "" means `runOutDir` (the run's --out folder).
 OutputOptions outputOptionsFromConfig(const Config& cfg, const std::string& runOutDir);
-
-/// The checkpoint options of a case (paths resolved like outputOptionsFromConfig).
-CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::string& runOutDir);
-/// Where a failed run's state goes: "DIR/checkpoint.h5" -> "DIR/checkpoint.failed.h5".
-std::string failedCheckpointPath(const std::string& path);
 
 /// A cell field to write: a scalar (c[0]) or a 3-vector (c[0..2]). `units` (e.g. "m/s", "1" for
 /// a dimensionless field) goes into the dataset's `units` attribute; empty: no attribute.
