@@ -29,8 +29,6 @@
 // cell edges (a bin is k cells or 1/k cell), so block edges are bin edges.
 #include "coloc/dem/dem.hpp"
 
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -38,87 +36,27 @@
 #include <span>
 #include <sstream>
 
+#include "buffers.hpp"
 #include "contact.hpp"
 #include "generate.hpp"
 #include "rng.hpp"
+#include "rows.hpp"
 
 namespace coloc::dem {
 
+using detail::cap;
+using detail::ensure;
+using detail::ensureRows;
+using detail::fmt;
+using detail::kAxis;
 using detail::Material;
 using detail::Model;
 using detail::PairCoeff;
+using detail::trimRows;
 
 namespace {
 constexpr int kTagGhostCount = 4100, kTagGhost = 4200, kTagUpdate = 4300, kTagMigCount = 4400,
               kTagMig = 4500;
-constexpr int kGhostBuild = 13;  // id, material, radius, mass, x3, v3, omega3
-constexpr int kGhostUpdate = 9;  // x3, v3, omega3
-constexpr int kMigFixed = 17;    // id, material, radius, mass, x3, v3, omega3, fExt3, nhist
-const char* kAxis[3] = {"x", "y", "z"};
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(4);
-  os << v;
-  return os.str();
-}
-
-template <class T>
-std::size_t cap(const std::vector<T>& v) {
-  return v.capacity() * sizeof(T);
-}
-
-/// Grow-only capacity with 1/8 headroom (instead of the 2x of push_back): the arrays hold at
-/// most ~12 % slack, and once the largest size has been seen nothing is allocated again.
-/// Large buffers (>= 4 MiB) are marked for transparent huge pages (THP in "madvise" mode): the
-/// first touch of a multi-million-particle set-up then takes one page fault per 2 MiB instead of
-/// per 4 KiB (page faults were a third of a 2M-particle set-up), and the scattered partner reads
-/// of the force loop miss the TLB less. Only the 2 MiB-aligned interior is marked; no effect on
-/// the contents or the capacity.
-template <class T>
-void hugePages(std::vector<T>& v) {
-  constexpr std::size_t kHuge = std::size_t{2} << 20;
-  const std::size_t bytes = v.capacity() * sizeof(T);
-  if (bytes < 2 * kHuge) return;
-  const auto a = reinterpret_cast<std::uintptr_t>(v.data());
-  const std::uintptr_t b = (a + kHuge - 1) & ~(kHuge - 1), e = (a + bytes) & ~(kHuge - 1);
-  if (e > b) madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);
-}
-
-template <class T>
-void ensure(std::vector<T>& v, std::size_t need) {
-  if (v.capacity() < need) {
-    v.reserve(need + need / 8 + 16);
-    hugePages(v);
-  }
-}
-
-/// ensure() for a buffer filled row by row: when it must grow, it grows to the size extrapolated
-/// from the rows done so far (+1/8), so a first build of millions of rows reallocates a few
-/// times instead of ~100 times (1/8 steps).
-template <class T>
-void ensureRows(std::vector<T>& v, std::size_t need, std::size_t rowsDone, std::size_t rows) {
-  if (v.capacity() >= need) return;
-  const std::size_t est = rowsDone > 0 ? static_cast<std::size_t>(static_cast<double>(v.size()) /
-                                                                  static_cast<double>(rowsDone) *
-                                                                  static_cast<double>(rows))
-                                       : 0;
-  ensure(v, std::max(need, est));
-}
-
-/// After a row-by-row fill: an extrapolated capacity far above the size (more than 1/4) is
-/// trimmed to the size + 1/8 (one copy; grow-only otherwise).
-template <class T>
-void trimRows(std::vector<T>& v) {
-  const std::size_t n = v.size();
-  if (v.capacity() > n + n / 4 + 64) {
-    std::vector<T> t;
-    t.reserve(n + n / 8 + 16);
-    t.assign(v.begin(), v.end());
-    v.swap(t);
-    hugePages(v);
-  }
-}
 }  // namespace
 
 struct DemSolver::Impl {
@@ -262,7 +200,6 @@ struct DemSolver::Impl {
   void forces(bool update);
   bool rolling = false;  // any material pair with rolling resistance
   void exchange(int d, int tagBase, bool sizesKnown);
-  void resizeAll(std::size_t n);
   std::size_t memory() const;
   void checkOverlap(double globalMax);
   // state (checkpoint/restart)
@@ -340,7 +277,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     const auto ownsX = [this](const double* x) { return owns(x); };
     std::size_t count = 0;
     detail::generate(cfg, info, lo, hi, ownsX, [&count](const detail::NewParticle&) { ++count; });
-    resizeAll(count);
+    detail::resizeAll(p, count);
     hStart.assign(count + 1, 0);
     detail::generate(cfg, info, lo, hi, ownsX,
                      [this](const detail::NewParticle& q) { addParticle(q); });
@@ -588,9 +525,11 @@ void DemSolver::Impl::checkTimeStep() {
 
 void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
   const std::size_t n = p.nOwned + 1;
-  if (p.id.size() < n) resizeAll(n);  // sized beforehand by the constructor's counting pass
+  if (p.id.size() < n) detail::resizeAll(p, n);  // sized beforehand by the counting pass
   const std::size_t i = n - 1;
   p.nOwned = n;
+  for (auto& e : p.extra)
+    for (auto& c : e.data) c[i] = 0;
   p.id[i] = q.id;
   p.material[i] = q.material;
   p.radius[i] = q.radius;
@@ -605,33 +544,6 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
     hStart.resize(n + 1);
   }
   hStart[n] = hStart[n - 1];
-}
-
-void DemSolver::Impl::resizeAll(std::size_t n) {
-  ensure(p.id, n);
-  ensure(p.material, n);
-  ensure(p.radius, n);
-  ensure(p.mass, n);
-  for (int d = 0; d < 3; ++d) {
-    ensure(p.x[d], n);
-    ensure(p.v[d], n);
-    ensure(p.omega[d], n);
-    ensure(p.f[d], n);
-    ensure(p.torque[d], n);
-    ensure(p.fExt[d], n);
-  }
-  p.id.resize(n);
-  p.material.resize(n);
-  p.radius.resize(n);
-  p.mass.resize(n);
-  for (int d = 0; d < 3; ++d) {
-    p.x[d].resize(n);
-    p.v[d].resize(n);
-    p.omega[d].resize(n);
-    p.f[d].resize(n);
-    p.torque[d].resize(n);
-    p.fExt[d].resize(n);
-  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -770,20 +682,7 @@ bool DemSolver::Impl::beyondOutflow(std::size_t i, int* which) const {
 }
 
 void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
-  if (w != i) {
-    p.id[w] = p.id[i];
-    p.material[w] = p.material[i];
-    p.radius[w] = p.radius[i];
-    p.mass[w] = p.mass[i];
-    for (int k = 0; k < 3; ++k) {
-      p.x[k][w] = p.x[k][i];
-      p.v[k][w] = p.v[k][i];
-      p.omega[k][w] = p.omega[k][i];
-      p.f[k][w] = p.f[k][i];
-      p.torque[k][w] = p.torque[k][i];
-      p.fExt[k][w] = p.fExt[k][i];
-    }
-  }
+  if (w != i) detail::copyRow(p, i, w);
   hStart[w] = hw;
   for (int e = h0; e < h1; ++e, ++hw) {
     hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
@@ -1164,13 +1063,16 @@ void DemSolver::Impl::exchange(int d, int tagBase, bool sizesKnown) {
   if (msgs > 0)
     timers.book(Exchange::IntraPhysics, bytes, msgs, comm.wtime() - t0,
                 tagBase >= kTagMigCount && tagBase < kTagMigCount + 30 ? Traffic::DemMigrate
-                                                                        : Traffic::DemGhost);
+                                                                       : Traffic::DemGhost);
 }
 
 void DemSolver::Impl::migrate() {
   std::string err;
   p.nGhost = 0;
-  resizeAll(p.nOwned);
+  detail::resizeAll(p, p.nOwned);
+  // a migrating particle: its row of the field table (kOpMigrate), its history count, then
+  // (partner id, shear 3) per history
+  const std::size_t W = detail::rowWidth(p, kOpMigrate);
   for (int d = 0; d < 3; ++d) {
     sbuf[0].clear();
     sbuf[1].clear();
@@ -1219,14 +1121,9 @@ void DemSolver::Impl::migrate() {
         ++w;
       } else {
         auto& b = sbuf[dir > 0 ? 1 : 0];
-        b.push_back(static_cast<double>(p.id[i]));
-        b.push_back(p.material[i]);
-        b.push_back(p.radius[i]);
-        b.push_back(p.mass[i]);
-        for (int k = 0; k < 3; ++k) b.push_back(p.x[k][i]);
-        for (int k = 0; k < 3; ++k) b.push_back(p.v[k][i]);
-        for (int k = 0; k < 3; ++k) b.push_back(p.omega[k][i]);
-        for (int k = 0; k < 3; ++k) b.push_back(p.fExt[k][i]);
+        const std::size_t o = b.size();
+        b.resize(o + W);
+        detail::packRow(p, kOpMigrate, i, nullptr, b.data() + o);
         b.push_back(h1 - h0);
         for (int e = h0; e < h1; ++e) {
           b.push_back(static_cast<double>(hId[static_cast<std::size_t>(e)]));
@@ -1247,21 +1144,11 @@ void DemSolver::Impl::migrate() {
       std::size_t q = 0;
       while (q < b.size()) {
         const std::size_t i = p.nOwned;
-        resizeAll(i + 1);
+        detail::resizeAll(p, i + 1);
         p.nOwned = i + 1;
-        p.id[i] = static_cast<std::int64_t>(b[q]);
-        p.material[i] = static_cast<int>(b[q + 1]);
-        p.radius[i] = b[q + 2];
-        p.mass[i] = b[q + 3];
-        for (int k = 0; k < 3; ++k) {
-          p.x[k][i] = b[q + 4 + k];
-          p.v[k][i] = b[q + 7 + k];
-          p.omega[k][i] = b[q + 10 + k];
-          p.fExt[k][i] = b[q + 13 + k];
-          p.f[k][i] = p.torque[k][i] = 0;
-        }
-        const int nh = static_cast<int>(b[q + 16]);
-        q += kMigFixed;
+        detail::unpackRow(p, kOpMigrate, b.data() + q, i, true);
+        const int nh = static_cast<int>(b[q + W]);
+        q += W + 1;
         ensure(hId, hId.size() + static_cast<std::size_t>(nh));
         ensure(hS, hS.size() + 3 * static_cast<std::size_t>(nh));
         ensure(hStart, hStart.size() + 1);
@@ -1326,18 +1213,7 @@ void DemSolver::Impl::sortByBin() {
     }
     for (std::size_t k = 0; k < n; ++k) perm[k] = ~perm[k];
   };
-  apply(p.id);
-  apply(p.material);
-  apply(p.radius);
-  apply(p.mass);
-  for (int d = 0; d < 3; ++d) {
-    apply(p.x[d]);
-    apply(p.v[d]);
-    apply(p.omega[d]);
-    apply(p.f[d]);
-    apply(p.torque[d]);
-    apply(p.fExt[d]);
-  }
+  detail::forEachColumn(p, apply);
   // the history rows stay in pre-sort order: buildLists reads row perm[k] for particle k
   for (int d = 0; d < 3; ++d) ensure(x0[d], n);
   for (int d = 0; d < 3; ++d)
@@ -1346,6 +1222,7 @@ void DemSolver::Impl::sortByBin() {
 
 void DemSolver::Impl::buildGhosts() {
   const Int3 coords = dec.coords(), dims = dec.dims();
+  const std::size_t W = detail::rowWidth(p, kOpGhostBuild);
   for (int d = 0; d < 3; ++d) {
     const std::size_t nBefore = p.size();
     for (int s = 0; s < 2; ++s) {
@@ -1361,18 +1238,12 @@ void DemSolver::Impl::buildGhosts() {
       }
       const double* x = p.x[d].data();
       const double lim = s == 0 ? lo[d] + rc : hi[d] - rc;
-      for (std::size_t i = 0; i < nBefore; ++i) {
-        if (s == 0 ? x[i] < lim : x[i] >= lim) {
-          sw.send.push_back(static_cast<int>(i));
-          b.push_back(static_cast<double>(p.id[i]));
-          b.push_back(p.material[i]);
-          b.push_back(p.radius[i]);
-          b.push_back(p.mass[i]);
-          for (int k = 0; k < 3; ++k) b.push_back(p.x[k][i] + (k == d ? sw.shift : 0.0));
-          for (int k = 0; k < 3; ++k) b.push_back(p.v[k][i]);
-          for (int k = 0; k < 3; ++k) b.push_back(p.omega[k][i]);
-        }
-      }
+      for (std::size_t i = 0; i < nBefore; ++i)
+        if (s == 0 ? x[i] < lim : x[i] >= lim) sw.send.push_back(static_cast<int>(i));
+      double shift[3] = {0, 0, 0};
+      shift[d] = sw.shift;
+      b.resize(sw.send.size() * W);
+      detail::packRows(p, kOpGhostBuild, sw.send, shift, b.data());
     }
     if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) {
       for (int s = 0; s < 2; ++s) swaps[d][static_cast<std::size_t>(s)].recvCount = 0;
@@ -1381,61 +1252,37 @@ void DemSolver::Impl::buildGhosts() {
     exchange(d, kTagGhostCount + 10 * d, false);
     for (int s = 0; s < 2; ++s) {
       const auto& b = rbuf[static_cast<std::size_t>(s)];
-      const std::size_t cnt = b.size() / kGhostBuild;
+      const std::size_t cnt = W > 0 ? b.size() / W : 0;
       const std::size_t start = p.size();
       auto& sw = swaps[d][static_cast<std::size_t>(s)];
       sw.recvStart = static_cast<int>(start);
       sw.recvCount = static_cast<int>(cnt);
-      resizeAll(start + cnt);
+      detail::resizeAll(p, start + cnt);
       p.nGhost += cnt;
-      for (std::size_t q = 0; q < cnt; ++q) {
-        const double* r = &b[q * kGhostBuild];
-        const std::size_t i = start + q;
-        p.id[i] = static_cast<std::int64_t>(r[0]);
-        p.material[i] = static_cast<int>(r[1]);
-        p.radius[i] = r[2];
-        p.mass[i] = r[3];
-        for (int k = 0; k < 3; ++k) {
-          p.x[k][i] = r[4 + k];
-          p.v[k][i] = r[7 + k];
-          p.omega[k][i] = r[10 + k];
-          p.f[k][i] = p.torque[k][i] = p.fExt[k][i] = 0;
-        }
-      }
+      detail::unpackRows(p, kOpGhostBuild, b.data(), cnt, start, true);
     }
   }
 }
 
 void DemSolver::Impl::updateGhosts() {
+  const std::size_t W = detail::rowWidth(p, kOpGhostUpdate);
   for (int d = 0; d < 3; ++d) {
     if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) continue;
     for (int s = 0; s < 2; ++s) {
       const auto& sw = swaps[d][static_cast<std::size_t>(s)];
       auto& b = sbuf[static_cast<std::size_t>(s)];
-      b.resize(sw.send.size() * kGhostUpdate);
-      double* o = b.data();
-      for (const int i : sw.send) {
-        const auto u = static_cast<std::size_t>(i);
-        for (int k = 0; k < 3; ++k) o[k] = p.x[k][u] + (k == d ? sw.shift : 0.0);
-        for (int k = 0; k < 3; ++k) o[3 + k] = p.v[k][u];
-        for (int k = 0; k < 3; ++k) o[6 + k] = p.omega[k][u];
-        o += kGhostUpdate;
-      }
-      rbuf[static_cast<std::size_t>(s)].resize(static_cast<std::size_t>(sw.recvCount) *
-                                               kGhostUpdate);
+      double shift[3] = {0, 0, 0};
+      shift[d] = sw.shift;
+      b.resize(sw.send.size() * W);
+      detail::packRows(p, kOpGhostUpdate, sw.send, shift, b.data());
+      rbuf[static_cast<std::size_t>(s)].resize(static_cast<std::size_t>(sw.recvCount) * W);
     }
     exchange(d, kTagUpdate + 10 * d, true);
     for (int s = 0; s < 2; ++s) {
       const auto& sw = swaps[d][static_cast<std::size_t>(s)];
-      const double* r = rbuf[static_cast<std::size_t>(s)].data();
-      for (int q = 0; q < sw.recvCount; ++q, r += kGhostUpdate) {
-        const auto i = static_cast<std::size_t>(sw.recvStart + q);
-        for (int k = 0; k < 3; ++k) {
-          p.x[k][i] = r[k];
-          p.v[k][i] = r[3 + k];
-          p.omega[k][i] = r[6 + k];
-        }
-      }
+      detail::unpackRows(p, kOpGhostUpdate, rbuf[static_cast<std::size_t>(s)].data(),
+                         static_cast<std::size_t>(sw.recvCount),
+                         static_cast<std::size_t>(sw.recvStart), false);
     }
   }
 }
@@ -1716,10 +1563,8 @@ void DemSolver::Impl::forces(bool update) {
 }
 
 std::size_t DemSolver::Impl::memory() const {
-  std::size_t b = cap(p.id) + cap(p.material) + cap(p.radius) + cap(p.mass);
-  for (int d = 0; d < 3; ++d)
-    b += cap(p.x[d]) + cap(p.v[d]) + cap(p.omega[d]) + cap(p.f[d]) + cap(p.torque[d]) +
-         cap(p.fExt[d]) + cap(x0[d]);
+  std::size_t b = detail::columnBytes(p);
+  for (int d = 0; d < 3; ++d) b += cap(x0[d]);
   b += cap(binOf) + cap(binStart) + cap(binItems) + cap(rowStart) + cap(nbr) + cap(slot);
   b += cap(hStart) + cap(hId) + cap(hS) + cap(freeSlots);
   for (const auto& a : swaps)
@@ -1758,8 +1603,7 @@ std::vector<double> sendBlocks(const Comm& comm, const std::vector<std::vector<d
   comm.alltoallv(std::span<const double>(send), sc, sd, std::span<double>(recv), rc, rd);
   return recv;
 }
-constexpr int kStateRec = 22;  // id, material, radius, mass, x3, v3, omega3, f3, torque3, fExt3
-constexpr int kHistRec = 5;    // holder, partner, shear3
+constexpr int kHistRec = 5;  // holder, partner, shear3
 }  // namespace
 
 DemFlow DemSolver::Impl::globalFlow() const {
@@ -1804,38 +1648,33 @@ void DemSolver::Impl::restore(DemState& st) {
   }
   // 1. particles to their owners (by position), a general all-to-all: any rank may hold any
   //    subset of the state
+  //    as rows of the state fields; the solver takes the state's extra fields (the same on
+  //    every rank: the row widths are compared)
+  std::string err;
+  for (const auto& e : q.extra)
+    if ((e.ops & kOpState) && !std::any_of(p.extra.begin(), p.extra.end(),
+                                           [&](const auto& f) { return f.name == e.name; }))
+      p.addField(e.name, e.components, e.ops);
+  const std::size_t W = detail::rowWidth(q, kOpState);
+  if (W != detail::rowWidth(p, kOpState) ||
+      comm.max(static_cast<long long>(W)) != comm.min(static_cast<long long>(W)))
+    err =
+        "the restored state's extra particle fields differ between the ranks or from the solver's";
+  comm.raiseIfAny(err);
   std::vector<std::vector<double>> out(static_cast<std::size_t>(P));
   for (std::size_t i = 0; i < q.nOwned; ++i) {
     const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
     auto& b = out[static_cast<std::size_t>(ownerRank(xi))];
-    b.push_back(static_cast<double>(q.id[i]));
-    b.push_back(q.material[i]);
-    b.push_back(q.radius[i]);
-    b.push_back(q.mass[i]);
-    for (const auto* a : {&q.x, &q.v, &q.omega, &q.f, &q.torque, &q.fExt})
-      for (int k = 0; k < 3; ++k) b.push_back((*a)[k][i]);
+    const std::size_t o = b.size();
+    b.resize(o + W);
+    detail::packRow(q, kOpState, i, nullptr, b.data() + o);
   }
   std::vector<double> in = sendBlocks(comm, out);
-  const std::size_t n = in.size() / kStateRec;
-  resizeAll(n);
+  const std::size_t n = W > 0 ? in.size() / W : 0;
+  detail::resizeAll(p, n);
   p.nOwned = n;
   p.nGhost = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* r = &in[i * kStateRec];
-    p.id[i] = static_cast<std::int64_t>(r[0]);
-    p.material[i] = static_cast<int>(r[1]);
-    p.radius[i] = r[2];
-    p.mass[i] = r[3];
-    for (int k = 0; k < 3; ++k) {
-      p.x[k][i] = r[4 + k];
-      p.v[k][i] = r[7 + k];
-      p.omega[k][i] = r[10 + k];
-      p.f[k][i] = r[13 + k];
-      p.torque[k][i] = r[16 + k];
-      p.fExt[k][i] = r[19 + k];
-    }
-  }
-  std::string err;
+  detail::unpackRows(p, kOpState, in.data(), n, 0, true);
   for (std::size_t i = 0; i < n && err.empty(); ++i)
     if (p.material[i] < 0 || p.material[i] >= nMat)
       err = "restored particle " + std::to_string(p.id[i]) + " has material " +
@@ -1956,24 +1795,7 @@ DemState DemSolver::Impl::save() {
   st.rebuilds = rebuilds;
   st.flow = globalFlow();
   const std::size_t n = p.nOwned;
-  auto& q = st.particles;
-  q.nOwned = n;
-  q.nGhost = 0;
-  q.id.assign(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(n));
-  q.material.assign(p.material.begin(), p.material.begin() + static_cast<std::ptrdiff_t>(n));
-  q.radius.assign(p.radius.begin(), p.radius.begin() + static_cast<std::ptrdiff_t>(n));
-  q.mass.assign(p.mass.begin(), p.mass.begin() + static_cast<std::ptrdiff_t>(n));
-  for (int k = 0; k < 3; ++k) {
-    const auto cp = [n](const std::vector<double>& a, std::vector<double>& b) {
-      b.assign(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(n));
-    };
-    cp(p.x[k], q.x[k]);
-    cp(p.v[k], q.v[k]);
-    cp(p.omega[k], q.omega[k]);
-    cp(p.f[k], q.f[k]);
-    cp(p.torque[k], q.torque[k]);
-    cp(p.fExt[k], q.fExt[k]);
-  }
+  st.particles = ownedRows(p);
   // every touching history under each owned particle of the pair (a restart on other ranks may
   // separate them), as seen from that particle
   for (std::size_t q = 0; q < p.size(); ++q) {
