@@ -93,8 +93,8 @@ std::vector<double> gatherRows(const coloc::Comm& comm, const ParticleStore& q, 
   const auto counts = comm.allgather(static_cast<int>(rows.size()));
   std::vector<int> displ;
   std::vector<double> all(static_cast<std::size_t>(coloc::Comm::displacements(counts, displ)));
-  MPI_Allgatherv(rows.data(), static_cast<int>(rows.size()), MPI_DOUBLE, all.data(),
-                 counts.data(), displ.data(), MPI_DOUBLE, comm.raw());
+  MPI_Allgatherv(rows.data(), static_cast<int>(rows.size()), MPI_DOUBLE, all.data(), counts.data(),
+                 displ.data(), MPI_DOUBLE, comm.raw());
   return all;
 }
 
@@ -162,9 +162,10 @@ TEST(ParticleFields, GhostsMigrationAndState) {
   EXPECT_EQ(comm.sum(wrongRows(p)), 0) << "migration";
   EXPECT_EQ(a.dem->globalCount(), kN);
   if (comm.isRoot())
-    std::printf("ranks %d: %ld ghosts at the start, %ld particles arrived from other ranks, %lld "
-                "rebuilds, %ld steps without rebuild\n",
-                comm.size(), ghosts, arrived, a.dem->rebuildCount() - rebuilds0, updates);
+    std::printf(
+        "ranks %d: %ld ghosts at the start, %ld particles arrived from other ranks, %lld "
+        "rebuilds, %ld steps without rebuild\n",
+        comm.size(), ghosts, arrived, a.dem->rebuildCount() - rebuilds0, updates);
 
   // state: the fields in kOpState travel in DemState; restored on one rank, and all on rank 0
   const DemState st = a.dem->saveState();
@@ -177,8 +178,7 @@ TEST(ParticleFields, GhostsMigrationAndState) {
   DemSolver s(ser.dec, ser.cfg, ser.timers, stateOf(rows, w, st));
   EXPECT_EQ(s.particles().nOwned, static_cast<std::size_t>(kN));
   EXPECT_EQ(wrongRows(s.particles()), 0) << "restored on one rank";
-  DemSolver z(a.dec, a.cfg, a.timers,
-              stateOf(comm.isRoot() ? rows : std::vector<double>{}, w, st));
+  DemSolver z(a.dec, a.cfg, a.timers, stateOf(comm.isRoot() ? rows : std::vector<double>{}, w, st));
   EXPECT_EQ(comm.sum(wrongRows(z.particles())), 0) << "restored from rank 0";
   for (int k = 0; k < 50; ++k) {
     s.substep();
