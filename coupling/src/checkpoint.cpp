@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
+#include <sstream>
+#include <type_traits>
 #include <utility>
 
 #include "coloc/core/error.hpp"
@@ -256,16 +258,27 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
   const auto& p = s.particles;
   const std::size_t n = p.nOwned;
   file.createGroup(group);
-  writeParticleArray(file, group + "/id", std::span<const std::int64_t>(p.id.data(), n));
-  writeParticleArray(file, group + "/material", std::span<const int>(p.material.data(), n));
-  writeParticleVec3(file, group + "/x", firstRows(p.x, n));
-  writeParticleVec3(file, group + "/v", firstRows(p.v, n));
-  writeParticleVec3(file, group + "/omega", firstRows(p.omega, n));
-  writeParticleVec3(file, group + "/f", firstRows(p.f, n));
-  writeParticleVec3(file, group + "/torque", firstRows(p.torque, n));
-  writeParticleVec3(file, group + "/f_ext", firstRows(p.fExt, n));
-  writeParticleArray(file, group + "/radius", std::span<const double>(p.radius.data(), n));
-  writeParticleArray(file, group + "/mass", std::span<const double>(p.mass.data(), n));
+  // every field of the DEM's table in its state (dem/fields.hpp): the built-in ones under the
+  // group, the extra ones under group/extra, listed in its attribute "fields"
+  std::string extras;
+  for (const auto& e : p.extra)
+    if (e.ops & dem::kOpState)
+      extras += e.name + " " + std::to_string(e.components) + " " + std::to_string(e.ops) + ";";
+  if (!extras.empty()) {
+    file.createGroup(group + "/extra");
+    file.setAttribute(group + "/extra", "fields", extras);
+  }
+  dem::forEachField(p, [&]<class T>(const dem::FieldInfo& fi, const std::vector<T>* c) {
+    if (!(fi.ops & dem::kOpState)) return;
+    const std::string path = group + (fi.extra ? "/extra/" : "/") + std::string(fi.name);
+    if (fi.components == 1)
+      writeParticleArray(file, path, std::span<const T>(c[0].data(), n));
+    else if constexpr (std::is_same_v<T, double>)
+      writeParticleVec3(
+          file, path,
+          {std::span<const double>(c[0].data(), n), std::span<const double>(c[1].data(), n),
+           std::span<const double>(c[2].data(), n)});
+  });
   const RowRange rows = rowsOf(file.comm(), static_cast<long long>(n));
   file.setAttribute(group, "count", rows.total);
   file.setAttribute(group, "time", s.time);
@@ -304,16 +317,24 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
   auto& p = s.particles;
   p.nOwned = static_cast<std::size_t>(r.count);
   p.nGhost = 0;
-  p.id = readParticleArray<std::int64_t>(file, group + "/id", r);
-  p.material = readParticleArray<int>(file, group + "/material", r);
-  p.x = readParticleVec3(file, group + "/x", r);
-  p.v = readParticleVec3(file, group + "/v", r);
-  p.omega = readParticleVec3(file, group + "/omega", r);
-  p.f = readParticleVec3(file, group + "/f", r);
-  p.torque = readParticleVec3(file, group + "/torque", r);
-  p.fExt = readParticleVec3(file, group + "/f_ext", r);
-  p.radius = readParticleArray<double>(file, group + "/radius", r);
-  p.mass = readParticleArray<double>(file, group + "/mass", r);
+  if (file.exists(group + "/extra")) {  // "name components ops;" per extra field
+    std::istringstream in(file.attributeString(group + "/extra", "fields"));
+    std::string name;
+    int comps = 0;
+    unsigned ops = 0;
+    char sep = 0;
+    while (in >> name >> comps >> ops >> sep) p.addField(name, comps, ops);
+  }
+  dem::forEachField(p, [&]<class T>(const dem::FieldInfo& fi, std::vector<T>* c) {
+    if (!(fi.ops & dem::kOpState)) return;
+    const std::string path = group + (fi.extra ? "/extra/" : "/") + std::string(fi.name);
+    if (fi.components == 1) {
+      c[0] = readParticleArray<T>(file, path, r);
+    } else if constexpr (std::is_same_v<T, double>) {
+      auto v = readParticleVec3(file, path, r);
+      for (int k = 0; k < 3; ++k) c[k] = std::move(v[static_cast<std::size_t>(k)]);
+    }
+  });
   s.time = file.attributeDouble(group, "time");
   s.steps = file.attributeInt(group, "steps");
   s.rebuilds = file.attributeInt(group, "rebuilds");
@@ -406,24 +427,7 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
 
 dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long steps) {
   dem::DemState s;
-  const std::size_t n = p.nOwned;
-  auto& q = s.particles;
-  q.nOwned = n;
-  q.id.assign(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(n));
-  q.material.assign(p.material.begin(), p.material.begin() + static_cast<std::ptrdiff_t>(n));
-  auto copy3 = [n](const std::array<std::vector<double>, 3>& a,
-                   std::array<std::vector<double>, 3>& b) {
-    for (int d = 0; d < 3; ++d)
-      b[d].assign(a[d].begin(), a[d].begin() + static_cast<std::ptrdiff_t>(n));
-  };
-  copy3(p.x, q.x);
-  copy3(p.v, q.v);
-  copy3(p.omega, q.omega);
-  copy3(p.f, q.f);
-  copy3(p.torque, q.torque);
-  copy3(p.fExt, q.fExt);
-  q.radius.assign(p.radius.begin(), p.radius.begin() + static_cast<std::ptrdiff_t>(n));
-  q.mass.assign(p.mass.begin(), p.mass.begin() + static_cast<std::ptrdiff_t>(n));
+  s.particles = dem::ownedRows(p);
   s.time = time;
   s.steps = steps;
   return s;

@@ -14,10 +14,13 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/timers.hpp"
+#include "coloc/dem/fields.hpp"
 #include "coloc/partition/decomposition.hpp"
 
 namespace coloc::dem {
@@ -25,15 +28,49 @@ namespace coloc::dem {
 /// Declares the "particles.*" keys of the case file.
 void declareConfig(Schema& s);
 
-/// Structure of arrays; owned particles first, then ghosts.
+/// Structure of arrays; owned particles first, then ghosts. Every array is an entry of the field
+/// table (forEachField below), which says where it travels.
 struct ParticleStore {
   std::size_t nOwned = 0, nGhost = 0;
   std::vector<std::int64_t> id;
   std::vector<int> material;
   std::array<std::vector<double>, 3> x, v, omega, f, torque, fExt;
   std::vector<double> radius, mass;
+  std::vector<ExtraField> extra;  // quantities registered with addField
   std::size_t size() const { return nOwned + nGhost; }
+  /// Registers a per-particle quantity of 1 or 3 doubles travelling in `ops` (FieldOp bits), zero
+  /// for the rows present; returns its index in `extra`. Collective in effect: every rank
+  /// registers the same fields in the same order (a DemState that carries extra fields passes
+  /// them on to the solver it restores). Throws coloc::Error on a duplicate or bad entry.
+  std::size_t addField(const std::string& name, int components, unsigned ops);
+  /// Component `component` of the extra field `name` (throws coloc::Error if none).
+  std::vector<double>& field(std::string_view name, int component = 0);
+  const std::vector<double>& field(std::string_view name, int component = 0) const;
 };
+
+/// The field table: f(FieldInfo, columns) for every per-particle array of `p` (ParticleStore,
+/// const or not), where `columns` points to `components` std::vector<T> (T = std::int64_t, int or
+/// double): the built-in members, then the extra fields. A built-in field is one member above
+/// and one line here; packing, sorting, resizing, DemState and checkpoint files follow.
+template <class Store, class F>
+void forEachField(Store& p, F&& f) {
+  constexpr unsigned kGhost = kOpGhostBuild | kOpMigrate | kOpState;  // fixed per particle
+  constexpr unsigned kMoving = kGhost | kOpGhostUpdate;               // refreshed every step
+  f(FieldInfo{"id", 1, kGhost}, &p.id);
+  f(FieldInfo{"material", 1, kGhost}, &p.material);
+  f(FieldInfo{"x", 3, kMoving | kOpPosition}, p.x.data());
+  f(FieldInfo{"v", 3, kMoving}, p.v.data());
+  f(FieldInfo{"omega", 3, kMoving}, p.omega.data());
+  f(FieldInfo{"f", 3, kOpState}, p.f.data());
+  f(FieldInfo{"torque", 3, kOpState}, p.torque.data());
+  f(FieldInfo{"f_ext", 3, kOpMigrate | kOpState}, p.fExt.data());  // held over the sub-steps
+  f(FieldInfo{"radius", 1, kGhost}, &p.radius);
+  f(FieldInfo{"mass", 1, kGhost}, &p.mass);
+  for (auto& e : p.extra) f(FieldInfo{e.name, e.components, e.ops, true}, e.data.data());
+}
+
+/// The owned rows of every field in kOpState (nGhost = 0): what a DemState holds.
+ParticleStore ownedRows(const ParticleStore& p);
 
 /// One pair's tangential (and, where the model keeps one, rolling) history, keyed by global ids.
 /// `holder` is the particle that carries the record (it migrates with that particle).
@@ -56,7 +93,8 @@ struct DemFlow {
 };
 
 /// The complete restartable state of one rank's owned particles (checkpoint/restart and
-/// re-balancing). particles holds owned particles only (nGhost = 0), with f, torque and fExt.
+/// re-balancing). particles holds owned particles only (nGhost = 0): every field of the table in
+/// kOpState (with f, torque and fExt, and the extra fields registered with kOpState).
 struct DemState {
   ParticleStore particles;
   std::vector<ContactHistory> contacts;  // every history held by an owned particle
@@ -65,9 +103,10 @@ struct DemState {
   DemFlow flow;  // the same on every rank
 };
 
-/// The DEM's bins for blocks with these cuts (the rule every DemSolver applies: particles.bin_cells,
-/// particles.bin_split, or automatic: bins of whole cells holding the interaction range
-/// dmax + skin, or cells split into bins near that range). Throws ConfigError naming the key.
+/// The DEM's bins for blocks with these cuts (the rule every DemSolver applies:
+/// particles.bin_cells, particles.bin_split, or automatic: bins of whole cells holding the
+/// interaction range dmax + skin, or cells split into bins near that range). Throws ConfigError
+/// naming the key.
 struct BinLayout {
   std::array<double, 3> size{};  // bin edge (m)
   std::array<long long, 3> split{1, 1, 1}, multiple{1, 1, 1}, globalBins{1, 1, 1};
@@ -86,7 +125,9 @@ struct BinLayout {
   /// Global bin of a coordinate, clamped into the box (the DEM's owner rule).
   long long binOf(const GlobalGrid& g, int d, double x) const {
     const double s = std::floor((x - g.origin[d]) / size[d]);
-    long long b = !(s > -1e15) ? -(1LL << 50) : !(s < 1e15) ? (1LL << 50) : static_cast<long long>(s);
+    long long b = !(s > -1e15)  ? -(1LL << 50)
+                  : !(s < 1e15) ? (1LL << 50)
+                                : static_cast<long long>(s);
     return std::clamp(b, 0LL, globalBins[d] - 1);
   }
   /// The cell whose block owns a global bin.

@@ -1,0 +1,177 @@
+// dem/src/history.cpp — the contact-history pool: rows per owned particle at a rebuild (packing),
+// row compaction, the pool compacted after a restore.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <span>
+#include <string>
+
+#include "impl.hpp"
+#include "rows.hpp"
+
+namespace coloc::dem {
+
+using namespace detail;
+
+void HistoryPool::keepRows(std::size_t w, int h0, int h1, int& hw) {
+  hStart[w] = hw;
+  for (int e = h0; e < h1; ++e, ++hw) {
+    hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
+    for (int k = 0; k < 3; ++k)
+      hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
+          hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
+  }
+}
+
+void HistoryPool::truncate(std::size_t rows, int hw) {
+  hStart.resize(rows + 1);
+  hStart[rows] = hw;
+  hId.resize(static_cast<std::size_t>(hw));
+  hS.resize(3 * static_cast<std::size_t>(hw));
+}
+
+void HistoryPool::compact(std::vector<int>& slot) {
+  std::vector<double> v;
+  v.reserve(3 * (hId.size() - freeSlots.size()) + 16);
+  for (auto& s : slot)
+    if (s >= 0) {
+      v.insert(v.end(), hS.begin() + 3 * s, hS.begin() + 3 * s + 3);
+      s = static_cast<int>(v.size() / 3 - 1);
+    }
+  hS.swap(v);
+  std::vector<std::int64_t>(hS.size() / 3, 0).swap(hId);
+  std::vector<int>().swap(freeSlots);
+}
+
+void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
+  if (w != i) copyRow(p, i, w);
+  hist.keepRows(w, h0, h1, hw);
+}
+
+void DemSolver::Impl::packHistory() {
+  // The history pool becomes rows per owned particle (the format migration carries and the list
+  // build reads), keyed by the partner's global id (walls: -1..-6), shear as seen from the row's
+  // particle. An owned-ghost pair has one row, under its owned particle; an owned-owned pair one
+  // under its holder, and a second one under the partner when the two are bound for different
+  // ranks or only one of them wraps across a periodic face (the pair is then computed by each
+  // side for its own particle, with its own copy, as every owned-ghost pair). Done in place: the
+  // live pool slots are permuted into row order (no second pool).
+  const std::size_t n = p.nOwned, nAll = p.size();
+  ensure(iscr, n);
+  iscr.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {  // destination rank and periodic wrap of every particle
+    double x[3];
+    int wrap = 0;
+    for (int d = 0, w = 1; d < 3; ++d, w *= 3) {
+      x[d] = p.x[d][i];
+      if (bins.periodic[d]) {
+        if (x[d] < bins.origin[d]) {
+          x[d] += bins.L[d];
+          wrap += w;
+        } else if (x[d] >= bins.origin[d] + bins.L[d]) {
+          x[d] -= bins.L[d];
+          wrap += 2 * w;
+        }
+      }
+    }
+    iscr[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
+  }
+  const auto dup = [&](std::size_t a, int j) {
+    return a < n && j >= 0 && static_cast<std::size_t>(j) < n &&
+           iscr[a] != iscr[static_cast<std::size_t>(j)];
+  };
+  // pass 1: rows per particle; slots of zero histories are dropped
+  ensure(hist.hStart, n + 1);
+  hist.hStart.assign(n + 1, 0);
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const auto a = static_cast<std::size_t>(bins.binItems[q]);
+    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
+      const int s = list.slot[static_cast<std::size_t>(e)];
+      if (s < 0) continue;
+      const double* v = &hist.hS[3 * static_cast<std::size_t>(s)];
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0) {
+        list.slot[static_cast<std::size_t>(e)] = -1;
+        continue;
+      }
+      const int j = list.nbr[static_cast<std::size_t>(e)];
+      ++hist.hStart[(a < n ? a : static_cast<std::size_t>(j)) + 1];
+      if (dup(a, j)) ++hist.hStart[static_cast<std::size_t>(j) + 1];
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
+  const auto T = static_cast<std::size_t>(hist.hStart[n]);
+  const std::size_t M = std::max(T, hist.hId.size());
+  ensure(hist.hId, M);
+  hist.hId.resize(M);
+  ensure(hist.hS, 3 * M);
+  hist.hS.resize(3 * M);
+  // target position of every pool slot (live ones to their row, the others to the free rows),
+  // kept in hId, which pass 2 overwrites with the keys: bits 0-31 the target, bit 32 "position
+  // taken", bit 33 "moved"
+  constexpr std::int64_t kNone = 0xffffffffLL, kTakenPos = 1LL << 32, kMoved = 1LL << 33;
+  for (std::size_t s = 0; s < M; ++s) hist.hId[s] = kNone;
+  const auto setTarget = [&](std::size_t s, std::size_t pos) {
+    hist.hId[s] = (hist.hId[s] & ~kNone) | static_cast<std::int64_t>(pos);
+    hist.hId[pos] |= kTakenPos;
+  };
+  std::vector<int>& cur = bins.binOf;  // free until the re-sort
+  ensure(cur, n);
+  cur.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const auto a = static_cast<std::size_t>(bins.binItems[q]);
+    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
+      const int s = list.slot[static_cast<std::size_t>(e)];
+      if (s < 0) continue;
+      const int j = list.nbr[static_cast<std::size_t>(e)];
+      const int pos = cur[a < n ? a : static_cast<std::size_t>(j)]++;
+      if (dup(a, j)) ++cur[static_cast<std::size_t>(j)];
+      setTarget(static_cast<std::size_t>(s), static_cast<std::size_t>(pos));
+    }
+  }
+  for (std::size_t s = 0, pos = 0; s < M; ++s) {
+    if ((hist.hId[s] & kNone) != kNone) continue;
+    while (hist.hId[pos] & kTakenPos) ++pos;
+    setTarget(s, pos);
+  }
+  for (std::size_t s = 0; s < M; ++s) {  // move slot s to its target, cycle by cycle
+    if (hist.hId[s] & kMoved) continue;
+    double v[3] = {hist.hS[3 * s], hist.hS[3 * s + 1], hist.hS[3 * s + 2]};
+    std::size_t k = s;
+    for (;;) {
+      const auto t = static_cast<std::size_t>(hist.hId[k] & kNone);
+      hist.hId[k] |= kMoved;
+      for (int c = 0; c < 3; ++c) std::swap(v[c], hist.hS[3 * t + static_cast<std::size_t>(c)]);
+      if (t == s) break;
+      k = t;
+    }
+  }
+  // pass 2: keys, orientation, second copies
+  cur.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  for (std::size_t q = 0; q < nAll; ++q) {
+    const auto a = static_cast<std::size_t>(bins.binItems[q]);
+    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
+      if (list.slot[static_cast<std::size_t>(e)] < 0) continue;
+      const int j = list.nbr[static_cast<std::size_t>(e)];
+      double* v =
+          &hist.hS[3 * static_cast<std::size_t>(cur[a < n ? a : static_cast<std::size_t>(j)])];
+      if (a < n) {
+        hist.hId[static_cast<std::size_t>(cur[a]++)] =
+            j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+      } else {  // under the owned partner, seen from it
+        hist.hId[static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++)] = p.id[a];
+        for (int c = 0; c < 3; ++c) v[c] = -v[c];
+      }
+      if (dup(a, j)) {
+        const auto r = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
+        hist.hId[r] = p.id[a];
+        for (int c = 0; c < 3; ++c) hist.hS[3 * r + static_cast<std::size_t>(c)] = -v[c];
+      }
+    }
+  }
+  hist.hId.resize(T);
+  hist.hS.resize(3 * T);
+  hist.freeSlots.clear();
+}
+
+}  // namespace coloc::dem

@@ -1,0 +1,134 @@
+// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its rooms. Each room is a small
+// struct holding its data (bins.hpp, neighbors.hpp, history.hpp, ghosts.hpp; the particle
+// arrays and their field table in coloc/dem/dem.hpp); the methods are defined in the file of
+// their concept:
+//   dem.cpp        the sub-step (velocity Verlet), the rebuild sequence, the public interface
+//   setup.cpp      materials, bins, time-step check, initial particles
+//   flow.cpp       face conditions, outflow removal, inflow insertion, DemFlow
+//   history.cpp    contact-history pool: packing into rows per particle, compaction
+//   ghosts.cpp     face exchanges: migration, ghost build and update (rows of the field table)
+//   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
+//   neighbors.cpp  the half Verlet list build (and the history lookup of its entries)
+//   forces.cpp     contact and wall forces, contact energy
+//   state.cpp      save/restore (checkpoints, re-balancing)
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bins.hpp"
+#include "buffers.hpp"
+#include "coloc/dem/dem.hpp"
+#include "contact.hpp"
+#include "generate.hpp"
+#include "ghosts.hpp"
+#include "history.hpp"
+#include "neighbors.hpp"
+
+namespace coloc::dem {
+
+using detail::Material;
+using detail::Model;
+using detail::PairCoeff;
+
+namespace detail {
+constexpr int kTagGhostCount = 4100, kTagUpdate = 4300, kTagMigCount = 4400;
+}  // namespace detail
+
+struct DemSolver::Impl {
+  Impl(const Decomposition& d, const Config& cfg, Timers& t, DemState* initial = nullptr);
+
+  const Decomposition& dec;
+  Comm comm;
+  Timers& timers;
+  ParticleStore p;
+
+  // physics
+  Model model = Model::HertzMindlin;
+  double dt = 1e-5, time = 0;
+  bool frozen = false;
+  double g[3] = {0, 0, 0};
+  std::vector<Material> mats;
+  int nMat = 0;
+  std::vector<PairCoeff> pairC;  // [a * nMat + b]
+  std::vector<PairCoeff> wallC;  // [a]
+  bool rolling = false;          // any material pair with rolling resistance
+  std::array<std::array<bool, 2>, 3> wallOn{};
+  double skin = 0, rc = 0, overlapLimit = 0.2, dtFraction = 0.2;
+
+  // faces and flow (flow.cpp). particles.boundary: the condition of each box face, for every
+  // rank (not only the boundary blocks); Open = no wall (particles.walls false): a particle
+  // leaving is an error. Every member of `flow` except the out ones is global and identical on
+  // every rank (the out ones count this rank's removals).
+  enum class Face { Wall, Outflow, Periodic, Open };
+  std::array<std::array<Face, 2>, 3> face{};
+  bool anyOutflow = false;
+  std::vector<detail::InflowInfo> inflow;
+  DemFlow flow;
+  std::int64_t inflowIdBase = 0;
+  std::uint64_t seed = 0;
+  std::vector<detail::NewParticle> incoming;  // accepted at the step's start, added at its rebuild
+  bool forceRebuild = false;
+
+  // the rooms
+  detail::Bins bins;
+  detail::NeighborList list;
+  detail::HistoryPool hist;
+  detail::GhostPlan ghosts;
+  std::vector<int> perm, iscr, inScr;  // scratch (grow-only)
+
+  // diagnostics of the last force computation and of the run
+  long long rebuilds = 0, steps = 0, contacts = 0, wallContacts = 0;
+  double maxOverlap = 0;
+  std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
+
+  // dem.cpp: the step
+  void substep();
+  void initialIntegrate();
+  void finalIntegrate();
+  bool decideRebuild();
+  void rebuild(bool first);
+  void checkOverlap(double globalMax);
+  std::string where() const;
+  std::size_t memory() const;
+  // setup.cpp
+  void readMaterials(const Config& cfg);
+  void setupBins(const Config& cfg, double dmax, long long total);
+  void checkTimeStep();
+  double massOf(int material, double r) const {
+    return mats[static_cast<std::size_t>(material)].density * 4.0 / 3.0 * M_PI * r * r * r;
+  }
+  void addParticle(const detail::NewParticle& q);
+  // flow.cpp
+  void setupFaces(const Config& cfg);
+  bool beyondOutflow(std::size_t i, int* which) const;
+  void removeOutflow();
+  void insertInflow();
+  // history.cpp
+  void packHistory();
+  /// Owned row i kept as row w (w <= i) while rows before it leave (migration, outflow), its
+  /// packed contact histories [h0, h1) moved down to hw on.
+  void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
+  // ghosts.cpp
+  void exchange(int d, int tagBase, bool sizesKnown);
+  void migrate();
+  void buildGhosts();
+  void updateGhosts();
+  // bins.cpp, neighbors.cpp
+  void sortByBin();
+  void buildLists();
+  // forces.cpp
+  void computeForces(bool update);
+  template <Model M, bool Rolling>
+  void forces(bool update);
+  // state.cpp
+  int ownerRank(const double* x) const;
+  void restore(DemState& st);
+  DemState save();
+  DemFlow globalFlow() const;  // collective: the out tallies summed over the ranks
+};
+
+}  // namespace coloc::dem

@@ -1,0 +1,122 @@
+// dem/src/neighbors.cpp — the half Verlet list in canonical (bin, id) order, and the
+// contact-history lookup of its entries.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <span>
+#include <string>
+
+#include "impl.hpp"
+
+namespace coloc::dem {
+
+using namespace detail;
+
+void DemSolver::Impl::buildLists() {
+  const std::size_t nAll = p.size(), n = p.nOwned;
+  // every local particle in (bin, id) order (owned clamped into the block, ghosts into the
+  // ghost layer; the owned ones are in that order already)
+  bins.sort(p, nAll, bins.binItems, iscr, static_cast<int>(n));
+  // Half list. binItems is every local particle in (bin, id) order: the canonical key K (the
+  // bin's (z, y, x) position, unwrapped across periodic faces, then the global id) orders the
+  // holders the same way at any rank count. The row of holder a lists the partners b with
+  // K_b > K_a: the rest of a's bin, then the 13 forward stencil bins in increasing index, each
+  // in increasing id; at least one of a, b is owned (ghost holders list owned partners only).
+  // Walls close the rows of owned particles.
+  ensure(list.rowStart, nAll + 1);
+  list.rowStart.resize(nAll + 1);
+  list.nbr.clear();
+  list.slot.clear();
+  const int sy = bins.nbx[0], sz = bins.nbx[0] * bins.nbx[1];
+  int fwd[13][3], nf = 0;
+  for (int dz = 0; dz <= 1; ++dz)
+    for (int dy = dz == 0 ? 0 : -1; dy <= 1; ++dy)
+      for (int dx = (dz == 0 && dy == 0) ? 1 : -1; dx <= 1; ++dx) {
+        fwd[nf][0] = dx;
+        fwd[nf][1] = dy;
+        fwd[nf][2] = dz;
+        ++nf;
+      }
+  const double* X = p.x[0].data();
+  const double* Y = p.x[1].data();
+  const double* Z = p.x[2].data();
+  const double* R = p.radius.data();
+  // the history of (a, b) as seen from a: the row of a keyed by b's id (or the wall code), else
+  // the row of b keyed by a's id, negated in place; the entry takes that row as its pool slot
+  // (rows are in pre-sort order: row perm[i] for particle i; a taken row's key is cleared)
+  constexpr std::int64_t kTaken = std::numeric_limits<std::int64_t>::min();
+  const auto lookup = [&](std::size_t a, int b) {
+    if (a < n) {
+      const auto h = static_cast<std::size_t>(perm[a]);
+      const std::int64_t key = b >= 0 ? p.id[static_cast<std::size_t>(b)] : b;
+      for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
+        if (hist.hId[static_cast<std::size_t>(e)] == key) {
+          hist.hId[static_cast<std::size_t>(e)] = kTaken;
+          list.slot.push_back(e);
+          return;
+        }
+    }
+    if (b >= 0 && static_cast<std::size_t>(b) < n) {
+      const auto h = static_cast<std::size_t>(perm[static_cast<std::size_t>(b)]);
+      for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
+        if (hist.hId[static_cast<std::size_t>(e)] == p.id[a]) {
+          hist.hId[static_cast<std::size_t>(e)] = kTaken;
+          for (int k = 0; k < 3; ++k) hist.hS[3 * static_cast<std::size_t>(e) + k] *= -1.0;
+          list.slot.push_back(e);
+          return;
+        }
+    }
+    list.slot.push_back(-1);
+  };
+  for (std::size_t q = 0; q < nAll; ++q) {
+    list.rowStart[q] = static_cast<int>(list.nbr.size());
+    ensureRows(list.nbr, list.nbr.size() + 64, q, nAll);
+    ensureRows(list.slot, list.slot.size() + 64, q, nAll);
+    const auto a = static_cast<std::size_t>(bins.binItems[q]);
+    const bool ownA = a < n;
+    const int ba = bins.binOf[a];
+    const int bx = ba % bins.nbx[0], by = (ba / bins.nbx[0]) % bins.nbx[1], bz = ba / sz;
+    const auto visit = [&](int from, int to) {
+      for (int t = from; t < to; ++t) {
+        const int j = bins.binItems[static_cast<std::size_t>(t)];
+        const auto u = static_cast<std::size_t>(j);
+        if (!ownA && u >= n) continue;
+        const double ex = X[a] - X[u], ey = Y[a] - Y[u], ez = Z[a] - Z[u];
+        const double cut = R[a] + R[u] + skin;
+        if (ex * ex + ey * ey + ez * ez < cut * cut) {
+          list.nbr.push_back(j);
+          lookup(a, j);
+        }
+      }
+    };
+    visit(static_cast<int>(q) + 1, bins.binStart[static_cast<std::size_t>(ba) + 1]);
+    for (int f = 0; f < nf; ++f) {
+      const int cx = bx + fwd[f][0], cy = by + fwd[f][1], cz = bz + fwd[f][2];
+      if (cx < 0 || cx >= bins.nbx[0] || cy < 0 || cy >= bins.nbx[1] || cz >= bins.nbx[2]) continue;
+      const auto b = static_cast<std::size_t>(cx + cy * sy + cz * sz);
+      visit(bins.binStart[b], bins.binStart[b + 1]);
+    }
+    if (!ownA) continue;
+    for (int d = 0; d < 3; ++d)
+      for (int s = 0; s < 2; ++s) {
+        if (!wallOn[d][static_cast<std::size_t>(s)]) continue;
+        const double dist =
+            s == 0 ? p.x[d][a] - bins.origin[d] : bins.origin[d] + bins.L[d] - p.x[d][a];
+        if (dist < R[a] + skin) {
+          const int code = -1 - (2 * d + s);
+          list.nbr.push_back(code);
+          lookup(a, code);
+        }
+      }
+  }
+  list.rowStart[nAll] = static_cast<int>(list.nbr.size());
+  trimRows(list.nbr);
+  trimRows(list.slot);
+  // rows no entry took are free slots
+  hist.freeSlots.clear();
+  for (std::size_t e = 0; e < hist.hId.size(); ++e)
+    if (hist.hId[e] != kTaken) hist.freeSlot(static_cast<int>(e));
+}
+
+}  // namespace coloc::dem

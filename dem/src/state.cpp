@@ -1,0 +1,255 @@
+// dem/src/state.cpp — the DEM state: canonical snapshot (save) and restore from any rank's subset
+// (checkpoints, re-balancing), particle rows of the field table.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <span>
+#include <string>
+
+#include "impl.hpp"
+#include "rows.hpp"
+
+namespace coloc::dem {
+
+using namespace detail;
+
+// ---------------------------------------------------------------------------------------------
+// state: checkpoint/restart and re-balancing
+
+int DemSolver::Impl::ownerRank(const double* x) const {
+  Int3 cell{};
+  for (int d = 0; d < 3; ++d) {
+    const long long b = bins.gbinClamped(x[d], d);
+    cell[d] = static_cast<int>(bins.binSplit[d] > 1 ? b / bins.binSplit[d] : b * bins.binMult[d]);
+  }
+  return dec.ownerOfCell(cell);
+}
+
+namespace {
+/// Sends blocks[r] to rank r (all-to-all); returns what arrived, rank after rank.
+std::vector<double> sendBlocks(const Comm& comm, const std::vector<std::vector<double>>& blocks) {
+  const int P = comm.size();
+  std::vector<int> sc(static_cast<std::size_t>(P)), rc, sd, rd;
+  std::vector<double> send;
+  for (int r = 0; r < P; ++r) {
+    const auto& b = blocks[static_cast<std::size_t>(r)];
+    sc[static_cast<std::size_t>(r)] = static_cast<int>(b.size());
+    send.insert(send.end(), b.begin(), b.end());
+  }
+  comm.alltoall(sc, rc);
+  Comm::displacements(sc, sd);
+  std::vector<double> recv(static_cast<std::size_t>(Comm::displacements(rc, rd)));
+  comm.alltoallv(std::span<const double>(send), sc, sd, std::span<double>(recv), rc, rd);
+  return recv;
+}
+constexpr int kHistRec = 5;  // holder, partner, shear3
+}  // namespace
+
+DemFlow DemSolver::Impl::globalFlow() const {
+  DemFlow f = flow;
+  double buf[8] = {static_cast<double>(f.countOut), f.massOut};
+  for (std::size_t k = 0; k < 6; ++k) buf[2 + k] = static_cast<double>(f.countOutByFace[k]);
+  comm.sumInPlace(std::span<double>(buf, 8));
+  f.countOut = static_cast<long long>(buf[0]);
+  f.massOut = buf[1];
+  for (std::size_t k = 0; k < 6; ++k) f.countOutByFace[k] = static_cast<long long>(buf[2 + k]);
+  return f;
+}
+
+void DemSolver::Impl::restore(DemState& st) {
+  const int P = comm.size();
+  const auto& q = st.particles;
+  time = st.time;
+  steps = st.steps;
+  rebuilds = st.rebuilds;
+  {
+    // the tallies are global (the same in every rank's state, or absent there): taken from
+    // the lowest rank with the longest record; the out tallies continue on rank 0 only (they
+    // are summed over the ranks)
+    std::vector<double> v = st.flow.pack();
+    const auto sizes = comm.allgather(static_cast<long long>(v.size()));
+    int from = 0;
+    for (int r = 1; r < P; ++r)
+      if (sizes[static_cast<std::size_t>(r)] > sizes[static_cast<std::size_t>(from)]) from = r;
+    v.resize(static_cast<std::size_t>(sizes[static_cast<std::size_t>(from)]));
+    comm.broadcast(std::span<double>(v), from);
+    const std::size_t nIn = inflow.size();
+    flow = DemFlow::unpack(v);
+    flow.due.resize(nIn, 0);
+    flow.inserted.resize(nIn, 0);
+    flow.dueMass.resize(nIn, 0.0);
+    flow.waiting.resize(nIn);
+    if (!comm.isRoot()) {
+      flow.countOut = 0;
+      flow.massOut = 0;
+      flow.countOutByFace = {};
+    }
+  }
+  // 1. particles to their owners (by position), a general all-to-all: any rank may hold any
+  //    subset of the state
+  //    as rows of the state fields; the solver takes the state's extra fields (the same on
+  //    every rank: the row widths are compared)
+  std::string err;
+  for (const auto& e : q.extra)
+    if ((e.ops & kOpState) && !std::any_of(p.extra.begin(), p.extra.end(),
+                                           [&](const auto& f) { return f.name == e.name; }))
+      p.addField(e.name, e.components, e.ops);
+  const std::size_t W = detail::rowWidth(q, kOpState);
+  if (W != detail::rowWidth(p, kOpState) ||
+      comm.max(static_cast<long long>(W)) != comm.min(static_cast<long long>(W)))
+    err =
+        "the restored state's extra particle fields differ between the ranks or from the solver's";
+  comm.raiseIfAny(err);
+  std::vector<std::vector<double>> out(static_cast<std::size_t>(P));
+  for (std::size_t i = 0; i < q.nOwned; ++i) {
+    const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
+    auto& b = out[static_cast<std::size_t>(ownerRank(xi))];
+    const std::size_t o = b.size();
+    b.resize(o + W);
+    detail::packRow(q, kOpState, i, nullptr, b.data() + o);
+  }
+  std::vector<double> in = sendBlocks(comm, out);
+  const std::size_t n = W > 0 ? in.size() / W : 0;
+  detail::resizeAll(p, n);
+  p.nOwned = n;
+  p.nGhost = 0;
+  detail::unpackRows(p, kOpState, in.data(), n, 0, true);
+  for (std::size_t i = 0; i < n && err.empty(); ++i)
+    if (p.material[i] < 0 || p.material[i] >= nMat)
+      err = "restored particle " + std::to_string(p.id[i]) + " has material " +
+            std::to_string(p.material[i]) + " (" + std::to_string(nMat) + " declared)";
+  comm.raiseIfAny(err);
+  // 2. histories to their holders through a directory (rank holder % P): the directory learns
+  //    every holder's owner, then forwards; a history may sit on any rank, apart from its holder
+  for (auto& b : out) b.clear();
+  for (const auto& c : st.contacts) {
+    if (c.holder < 0) {
+      if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
+      continue;
+    }
+    auto& b = out[static_cast<std::size_t>(c.holder % P)];
+    b.push_back(static_cast<double>(c.holder));
+    b.push_back(static_cast<double>(c.partner));
+    b.insert(b.end(), c.shear.begin(), c.shear.end());
+  }
+  comm.raiseIfAny(err);
+  st = DemState{};  // the input is no longer needed
+  const std::vector<double> held = sendBlocks(comm, out);
+  for (auto& b : out) b.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    out[static_cast<std::size_t>(p.id[i] % P)].push_back(static_cast<double>(p.id[i]));
+  std::vector<double> reg = sendBlocks(comm, out);  // ids owned by each rank, rank after rank
+  {
+    std::vector<int> rc(static_cast<std::size_t>(P)), rd;
+    std::vector<int> sc(static_cast<std::size_t>(P));
+    for (int r = 0; r < P; ++r)
+      sc[static_cast<std::size_t>(r)] = static_cast<int>(out[static_cast<std::size_t>(r)].size());
+    comm.alltoall(sc, rc);
+    std::vector<std::pair<std::int64_t, int>> owner;  // (id, owner rank)
+    std::size_t k = 0;
+    for (int r = 0; r < P; ++r)
+      for (int c = 0; c < rc[static_cast<std::size_t>(r)]; ++c, ++k)
+        owner.emplace_back(static_cast<std::int64_t>(reg[k]), r);
+    std::sort(owner.begin(), owner.end());
+    for (auto& b : out) b.clear();
+    for (std::size_t h = 0; h + kHistRec <= held.size(); h += kHistRec) {
+      const auto id = static_cast<std::int64_t>(held[h]);
+      const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
+      if (it == owner.end() || it->first != id) {
+        if (err.empty())
+          err = "a restored contact history names holder " + std::to_string(id) +
+                ", which is not among the restored particles";
+        continue;
+      }
+      auto& b = out[static_cast<std::size_t>(it->second)];
+      b.insert(b.end(), held.begin() + static_cast<std::ptrdiff_t>(h),
+               held.begin() + static_cast<std::ptrdiff_t>(h + kHistRec));
+    }
+  }
+  comm.raiseIfAny(err);
+  const std::vector<double> mine = sendBlocks(comm, out);
+  // 3. history rows per local particle (the format migration and the list build use)
+  std::vector<std::pair<std::int64_t, int>> byId(n);
+  for (std::size_t i = 0; i < n; ++i) byId[i] = {p.id[i], static_cast<int>(i)};
+  std::sort(byId.begin(), byId.end());
+  const std::size_t nh = mine.size() / kHistRec;
+  std::vector<int> row(nh);
+  hist.hStart.assign(n + 1, 0);
+  for (std::size_t h = 0; h < nh; ++h) {
+    const auto id = static_cast<std::int64_t>(mine[h * kHistRec]);
+    const auto it = std::lower_bound(byId.begin(), byId.end(), std::make_pair(id, -1));
+    row[h] = it->second;
+    ++hist.hStart[static_cast<std::size_t>(row[h]) + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
+  hist.hId.assign(nh, 0);
+  hist.hS.assign(3 * nh, 0.0);
+  iscr.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  for (std::size_t h = 0; h < nh; ++h) {
+    const auto e = static_cast<std::size_t>(iscr[static_cast<std::size_t>(row[h])]++);
+    hist.hId[e] = static_cast<std::int64_t>(mine[h * kHistRec + 1]);
+    for (int k = 0; k < 3; ++k)
+      hist.hS[3 * e + static_cast<std::size_t>(k)] = mine[h * kHistRec + 2 + k];
+  }
+  // 4. the canonical rebuild (same orders as the one inside saveState), no force recomputation:
+  //    the saved forces start the next velocity-Verlet half step; the force pass below only
+  //    refreshes the diagnostics (contacts, overlap) and leaves f, torque and histories as saved
+  checkTimeStep();
+  rebuild(true);
+  hist.compact(list.slot);  // the rows held every history twice (under both particles of a pair)
+  {
+    ScopedPhase f(timers, Phase::DemForce);
+    std::vector<double> keep;
+    keep.reserve(6 * n);
+    for (const auto* a : {&p.f, &p.torque})
+      for (int k = 0; k < 3; ++k) keep.insert(keep.end(), (*a)[k].begin(), (*a)[k].begin() + n);
+    computeForces(false);
+    std::size_t o = 0;
+    for (auto* a : {&p.f, &p.torque})
+      for (int k = 0; k < 3; ++k, o += n)
+        std::copy(keep.begin() + static_cast<std::ptrdiff_t>(o),
+                  keep.begin() + static_cast<std::ptrdiff_t>(o + n), (*a)[k].begin());
+  }
+  checkOverlap(comm.max(maxOverlap));
+}
+
+DemState DemSolver::Impl::save() {
+  rebuild(false);  // canonical: migration, (bin, id) order, lists; the restored run does the same
+  DemState st;
+  st.time = time;
+  st.steps = steps;
+  st.rebuilds = rebuilds;
+  st.flow = globalFlow();
+  const std::size_t n = p.nOwned;
+  st.particles = ownedRows(p);
+  // every touching history under each owned particle of the pair (a restart on other ranks may
+  // separate them), as seen from that particle
+  for (std::size_t q = 0; q < p.size(); ++q) {
+    const auto a = static_cast<std::size_t>(bins.binItems[q]);
+    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
+      const int sl = list.slot[static_cast<std::size_t>(e)];
+      if (sl < 0) continue;
+      const double* sh = &hist.hS[3 * static_cast<std::size_t>(sl)];
+      if (sh[0] == 0 && sh[1] == 0 && sh[2] == 0) continue;
+      const int j = list.nbr[static_cast<std::size_t>(e)];
+      if (a < n) {
+        ContactHistory c;
+        c.holder = p.id[a];
+        c.partner = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+        c.shear = {sh[0], sh[1], sh[2]};
+        st.contacts.push_back(c);
+      }
+      if (j >= 0 && static_cast<std::size_t>(j) < n) {
+        ContactHistory c;
+        c.holder = p.id[static_cast<std::size_t>(j)];
+        c.partner = p.id[a];
+        c.shear = {-sh[0], -sh[1], -sh[2]};
+        st.contacts.push_back(c);
+      }
+    }
+  }
+  return st;
+}
+
+}  // namespace coloc::dem
