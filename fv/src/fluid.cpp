@@ -89,6 +89,28 @@ const FluidFields& FluidSolver::fields() const {
 void FluidSolver::markCoefficientsChanged() {
   impl_->coefficientsChanged = true;
 }
+CouplingInputs FluidSolver::couplingInputs() {
+  auto& m = *impl_;
+  m.uGhostsFresh = false;  // a superficial inlet's face velocity is U / eps
+  m.epsGhostsFresh = false;
+  m.ratesStale = true;  // as after fields()
+  m.coefficientsChanged = true;
+  return {m.f.eps, m.f.K, m.f.KUp};
+}
+void FluidSolver::startCoupling() {
+  auto& m = *impl_;
+  auto& f = m.f;
+  {
+    ScopedPhase t(m.timers, Phase::FluidHalo);
+    m.cellHalo.gather(f.eps, &m.timers, Exchange::IntraPhysics);
+  }
+  {
+    ScopedPhase t(m.timers, Phase::FluidBoundary);
+    applyScalarBc(m.dec, f.eps);
+  }
+  m.epsGhostsFresh = true;
+  std::copy(f.eps.data().begin(), f.eps.data().end(), f.epsOld.data().begin());
+}
 void FluidSolver::step(double dt) {
   impl_->step(dt);
 }
