@@ -172,7 +172,7 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
     if (coupled) {
       halo(g, F, r, cell, 3, false, 1, fh);
       const Layout one{n, kCouplingGhost, {0, 0, 0}};
-      halo(g, F, r, one, 1, false, 1, R.perStep[k(Traffic::CouplingHalo)]);
+      // (No Traffic::CouplingHalo: the coupling reads the fluid's eps, gathered above.)
       halo(g, F, r, one, 5, true, 1, R.perStep[k(Traffic::DepositSum)]);
     }
   }

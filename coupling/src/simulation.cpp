@@ -245,7 +245,6 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   const FieldLayout layout = std::as_const(*fluid_).fields().p.layout();
   solid_ = CellField(layout);
   scratch_ = CellField(layout);
-  eps_ = CellField(layout, 1.0);
   for (int d = 0; d < 3; ++d) {
     uCell_[d] = CellField(layout);
     uCellOld_[d] = CellField(layout);
@@ -258,12 +257,8 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   halo_ = HaloPlan(dec_, oneLayer);
 
   if (checkpoint) {
-    // What the last step left in the coupling's own fields: eps (with its ghosts), the
-    // cell-centred velocity and the pressure gradient of u^{n+1}, p^{n+1}.
-    const auto& f = std::as_const(*fluid_).fields();
-    forEach(eps_.interior(), [&](int i, int j, int k) { eps_(i, j, k) = f.eps(i, j, k); });
-    halo_.gather(eps_);
-    fillWallGhostsByMirror(dec_, eps_);
+    // What the last step left in the coupling's own fields: the cell-centred velocity and the
+    // pressure gradient of u^{n+1}, p^{n+1} (eps and its ghosts: restored by the fluid).
     fluid_->cellVelocity(uCell_);
     for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
     fluid_->pressureGradient(gradP_);
@@ -278,10 +273,10 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   depositParticles();
   sumDepositsAcrossBlocks();
   updateFluidCoefficients();
-  auto& f = fluid_->fields();
+  auto f = fluid_->couplingInputs();
   f.K.fill(0.0);
   for (auto& k : f.KUp) k.fill(0.0);
-  fluid_->syncEpsOld();
+  fluid_->startCoupling();
   refreshCellVelocity();
   fluid_->pressureGradient(gradP_);
   for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
@@ -531,7 +526,8 @@ const CellField& Simulation::sampled(const CellField& f, CellField& smoothed) {
 
 void Simulation::sampleFluidForDrag() {
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
-  interpolate(stencils_, eps_, epsAt_);  // eps = 1 - S(solid) is smooth already
+  // eps = 1 - S(solid) is smooth already; the fluid's eps^{n+1}, ghosts filled by its step.
+  interpolate(stencils_, std::as_const(*fluid_).fields().eps, epsAt_);
   for (int d = 0; d < 3; ++d) {
     interpolate(stencils_, sampled(uCell_[d], uSmooth_[d]), uAt_[d]);
     interpolate(stencils_, sampled(gradP_[d], gradPSmooth_[d]), gradPAt_[d]);
@@ -573,7 +569,7 @@ void Simulation::evaluateDrag(double dt) {
 
 void Simulation::depositParticles() {
   ScopedPhase t(timers_, Phase::CouplingDeposit);
-  auto& f = fluid_->fields();
+  auto f = fluid_->couplingInputs();
   const double vCell = dec_.grid().cellVolume();
   const double s = 1.0 / (rhoF_ * vCell);
   solid_.fill(0.0);
@@ -592,7 +588,7 @@ void Simulation::sumDepositsAcrossBlocks() {
   // periodic wrap is arithmetic inside the block, like the fold at walls: booked to deposition
   // (so a 1-rank run shows no across-ranks share without bytes).
   ScopedPhase t(timers_, halo_.crossesRanks() ? Phase::ExchangeRemote : Phase::CouplingDeposit);
-  auto& f = fluid_->fields();
+  auto f = fluid_->couplingInputs();
   Field3<double>* fields[5] = {&solid_, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
   halo_.scatterSum(fields, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
   if (smoothingPasses_ > 0) {
@@ -606,22 +602,15 @@ void Simulation::smoothField(CellField& f) {
 }
 
 void Simulation::updateFluidCoefficients() {
-  {
-    ScopedPhase t(timers_, Phase::CouplingDeposit);
-    auto& f = fluid_->fields();
-    double solid = 0;
-    forEach(solid_.interior(), [&](int i, int j, int k) {
-      solid += solid_(i, j, k);
-      const double e = std::clamp(1.0 - solid_(i, j, k), epsMin_, 1.0);
-      f.eps(i, j, k) = e;
-      eps_(i, j, k) = e;
-    });
-    solidVolume_ = dec_.comm().sum(solid) * dec_.grid().cellVolume();
-  }
-  ScopedPhase t(timers_, Phase::FluidHalo);
-  halo_.gather(eps_, &timers_, Exchange::IntraPhysics, Traffic::CouplingHalo);
-  fillWallGhostsByMirror(dec_, eps_);
-  fluid_->markCoefficientsChanged();
+  // eps^{n+1} into the fluid's one eps array (owned cells); its step fills the ghosts.
+  ScopedPhase t(timers_, Phase::CouplingDeposit);
+  auto f = fluid_->couplingInputs();
+  double solid = 0;
+  forEach(solid_.interior(), [&](int i, int j, int k) {
+    solid += solid_(i, j, k);
+    f.eps(i, j, k) = std::clamp(1.0 - solid_(i, j, k), epsMin_, 1.0);
+  });
+  solidVolume_ = dec_.comm().sum(solid) * dec_.grid().cellVolume();
 }
 
 void Simulation::advanceFluid(double dt) {

@@ -346,4 +346,39 @@ void applyScalarBc(const Decomposition& dec, Field3<double>& f) {
   }
 }
 
+void predictBoxFaces(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u,
+                     Field3<double>& uPrev) {
+  double* up = u.data().data();
+  double* pp = uPrev.data().data();
+  const std::ptrdiff_t stride = c == 0 ? 1 : c == 1 ? u.strideY() : u.strideZ();
+  for (int s = 0; s < 2; ++s) {
+    const std::ptrdiff_t sh = s == 0 ? stride : -stride;
+    forBoxFace(dec, bc, c, s, [&](int i, int j, int k, const FaceBc& fb) {
+      const std::ptrdiff_t q = u.index(i, j, k);
+      pp[q] = up[q];
+      if (fb.type == BcType::Outlet) up[q] = up[q + sh];
+    });
+  }
+}
+
+void projectOutletFaces(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u,
+                        const Field3<double>& eps, const Field3<double>& K, const Field3<double>& p,
+                        double dt, double ih) {
+  double* up = u.data().data();
+  const double* en = eps.data().data();
+  const double* kk = K.data().data();
+  const double* pp = p.data().data();
+  const std::ptrdiff_t cs = c == 0 ? 1 : c == 1 ? eps.strideY() : eps.strideZ();
+  for (int s = 0; s < 2; ++s) {
+    if (!bc.anyOnFace(c, s, BcType::Outlet)) continue;
+    forBoxFace(dec, bc, c, s, [&](int i, int j, int k, const FaceBc& fb) {
+      if (fb.type != BcType::Outlet) return;
+      const std::ptrdiff_t q = u.index(i, j, k);
+      const std::ptrdiff_t cc = s == 0 ? eps.index(i, j, k) : eps.index(i, j, k) - cs;
+      const double ef = en[cc], kf = kk[cc];
+      up[q] -= ef / (ef + kf * dt) * outletDifference(s, pp[cc], fb.pressure) * 2.0 * ih;
+    });
+  }
+}
+
 }  // namespace coloc::fv

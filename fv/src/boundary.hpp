@@ -88,4 +88,51 @@ void applyVelocityBc(const Decomposition& dec, const BoxBc& bc, int c, Field3<do
 /// Zero-gradient (mirror) ghosts of a cell field at the physical faces of this block.
 void applyScalarBc(const Decomposition& dec, Field3<double>& f);
 
+// ---- the pressure and the normal velocity at the box faces (every step) ----------------------
+// Only an outlet fixes the pressure (p = p_out at the face, half a cell from the centre of the
+// adjacent cell, which gives the face its eps and K); inlet, wall and slip faces are dp/dn = 0
+// and add nothing to the pressure equation. These are the outlet's rules; the fluid step calls
+// them, it writes none of its own.
+
+/// Whether this block touches box face (axis, side).
+inline bool touches(const Decomposition& dec, int axis, int side) {
+  return side == 0 ? dec.atLowBoundary(axis) : dec.atHighBoundary(axis);
+}
+
+/// fn(i, j, k, condition) for the faces of this block on box face (axis, side), local face
+/// indices (the index along `axis` is 0 or n); nothing when the block does not touch the face.
+template <class F>
+void forBoxFace(const Decomposition& dec, const BoxBc& bc, int axis, int side, F&& fn) {
+  if (!touches(dec, axis, side)) return;
+  const Int3 n = dec.cells();
+  IndexBox b{{0, 0, 0}, n};
+  b.lo[axis] = side == 0 ? 0 : n[axis];
+  b.hi[axis] = b.lo[axis] + 1;
+  forEach(b, [&](int i, int j, int k) { fn(i, j, k, bc.atLocal(dec, axis, side, i, j, k)); });
+}
+
+/// Coefficient of an outlet face in the pressure row of its cell (for q = p dt):
+/// 2 eps^2 / ((eps + K dt) h^2), eps and K of the cell (twice an interior face's: half a cell).
+inline double outletWeight(double eps, double K, double dt, double h) {
+  return 2.0 * eps * eps / ((eps + K * dt) * h * h);
+}
+
+/// The pressure difference across the half cell next to an outlet face, along +axis:
+/// p_cell - p_out at a low face, p_out - p_cell at a high one (the gradient is it * 2/h).
+inline double outletDifference(int side, double pCell, double pOut) {
+  return side == 0 ? pCell - pOut : pOut - pCell;
+}
+
+/// Predictor at the box faces of component c (faces 0 and n along c where the block touches the
+/// box): they keep u^n (uPrev = u there, the Dirichlet values), except that an outlet face takes
+/// the predicted velocity of the next interior face (du/dn = 0).
+void predictBoxFaces(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u,
+                     Field3<double>& uPrev);
+
+/// Projection of the outlet faces of component c: u -= eps/(eps + K dt) dt (2/h) outletDifference
+/// with the adjacent cell's eps, K and p (the pressure p, not q; ih = dt / h_c).
+void projectOutletFaces(const Decomposition& dec, const BoxBc& bc, int c, Field3<double>& u,
+                        const Field3<double>& eps, const Field3<double>& K, const Field3<double>& p,
+                        double dt, double ih);
+
 }  // namespace coloc::fv

@@ -1,5 +1,7 @@
-// The "fluid.*" keys of the case file (see docs/fv.md for the meaning of each choice).
+// The "fluid.*" keys of the case file (see docs/fv.md for the meaning of each choice), and their
+// typed values (params.hpp).
 #include "coloc/fv/fluid.hpp"
+#include "params.hpp"
 
 namespace coloc::fv {
 
@@ -91,6 +93,31 @@ void declareConfig(Schema& s) {
   s.number("fluid.steady_tol", 0.0,
            "steady-state stop: max|u^{n+1}-u^n| / max|u| below this ends a fluid-only run (0: off)",
            Range::nonNegative());
+}
+
+FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid) {
+  FluidParams p;
+  p.nu = cfg.number("fluid.nu");
+  p.dtFixed = cfg.number("fluid.dt");
+  p.adaptive = cfg.boolean("fluid.adaptive_dt");
+  p.cfl = cfg.number("fluid.cfl");
+  p.cflMax = cfg.number("fluid.cfl_max");
+  p.steadyTol = cfg.number("fluid.steady_tol");
+  p.ab2 = cfg.string("fluid.time_scheme") == "ab2";
+  const auto gr = cfg.vec3("gravity");
+  const auto bf = cfg.vec3("fluid.body_force");
+  for (int a = 0; a < 3; ++a) p.g[a] = gr[a] + bf[a];
+  const auto u0 = cfg.vec3("fluid.initial_velocity");
+  for (int a = 0; a < 3; ++a) p.initialVelocity[a] = u0[a];
+  p.convection = cfg.string("fluid.convection") == "central" ? Convection::Central
+                 : cfg.string("fluid.limiter") == "minmod"   ? Convection::Minmod
+                                                             : Convection::VanLeer;
+  p.solver = cfg.string("fluid.pressure.solver") == "smg" ? PressureSolver::Kind::Smg
+                                                          : PressureSolver::Kind::Pfmg;
+  p.pressureTol = cfg.number("fluid.pressure.tol");
+  p.pressureMaxIter = static_cast<int>(cfg.integer("fluid.pressure.max_iter"));
+  p.bc = boundaryFromConfig(cfg, grid);
+  return p;
 }
 
 }  // namespace coloc::fv

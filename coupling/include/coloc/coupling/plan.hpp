@@ -3,10 +3,10 @@
 // planLayout() partitions the case's particles (dem::caseParticles: the run's own generator) with
 // the blocks a strategy chooses for N ranks (partition/strategy.hpp: the run's own code path),
 // and counts per rank what one coupling step books in the exchange ledger (Timers, by Traffic
-// kind): the fluid's halo gathers, the coupling's eps gather, the reverse sum of the deposits,
-// the DEM ghost updates of every sub-step, the independent strategy's proxies and the in-rank
-// force hand-over. The halo schedule of a step (which gathers, how many fields) mirrors
-// fv::FluidSolver::step and Simulation::step; the exactness test (tests/coupling/
+// kind): the fluid's halo gathers (eps among them: the coupling reads the fluid's eps), the
+// reverse sum of the deposits, the DEM ghost updates of every sub-step, the independent strategy's
+// proxies and the in-rank force hand-over. The halo schedule of a step (which gathers, how many
+// fields) mirrors fv::FluidSolver::step and Simulation::step; the exactness test (tests/coupling/
 // test_plan_exact.cpp) compares it with the ledger of real runs, kind by kind.
 //
 // Not modelled per step: DEM migration and ghost rebuilds (they follow the particles' motion;

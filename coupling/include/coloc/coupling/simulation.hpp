@@ -228,7 +228,7 @@ class Simulation {
   bool coupled_ = false;
 
   // Cell fields on the fluid's cell layout.
-  CellField solid_, eps_, scratch_;
+  CellField solid_, scratch_;
   std::array<CellField, 3> uSmooth_, gradPSmooth_;
   int smoothingPasses_ = 0;
   std::array<CellField, 3> uCell_, uCellOld_, gradP_;

@@ -6,9 +6,13 @@
 // hypre Struct PCG + PFMG (SMG selectable).
 //
 // Contract with coupling/ (do not change without changing the coupling):
-//  - the coupling writes fields().eps (eps^{n+1}), fields().K and fields().KUp on owned cells
-//    before step(); the solver keeps eps^n in fields().epsOld and copies eps -> epsOld at the
-//    end of step(). Fluid-only cases leave eps = 1 and K = 0 (or set them in tests).
+//  - the fluid owns its inputs (the one eps^{n+1} array, K, KUp; checkpointed with it) and the
+//    old level eps^n it needs. The coupling writes the owned cells through couplingInputs()
+//    before step() (that marks the pressure matrix for rebuild); once, after writing the
+//    initial eps, startCoupling() makes it the state at the start too. step() fills the inputs'
+//    ghosts (one halo exchange) and copies eps -> eps^n at its end; between steps the coupling
+//    reads eps with its ghosts from fields() (no copy of its own). Fluid-only cases leave eps = 1
+//    and K = 0 (or set them in tests).
 //  - drag at a face uses the arithmetic mean of the two adjacent cells' K and KUp, and
 //    cellVelocity() is the arithmetic mean of the two faces of a cell: the two averages are
 //    adjoint, so the drag the fluid loses equals the drag the particles gain to round-off.
@@ -45,6 +49,14 @@ struct FluidCounters {
   bool ratesStale = false;  // nextDt() recomputes the velocity rate first
 };
 
+/// The fluid's inputs from the coupling, for writing their owned cells (the fluid's own arrays:
+/// fields().eps, K, KUp).
+struct CouplingInputs {
+  CellField& eps;                 // eps^{n+1}
+  CellField& K;                   // sum beta / (rho_f V_cell) (1/s)
+  std::array<CellField, 3>& KUp;  // sum beta u_p / (rho_f V_cell) (m/s^2)
+};
+
 struct FluidFields {
   FaceField u;                   // face-normal velocity components (m/s)
   CellField p;                   // kinematic pressure p/rho_f (m^2/s^2)
@@ -60,12 +72,21 @@ class FluidSolver {
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
 
+  /// Everything, writable (tests, restart): the ghosts and the rates count as stale after it.
   FluidFields& fields();
   const FluidFields& fields() const;
-  /// Tell the solver eps or K changed since the last step (the matrix is rebuilt in step()).
+  /// The coupling's inputs of the next step, to write on owned cells: the next step rebuilds
+  /// the pressure matrix and refreshes every ghost layer that depends on them.
+  CouplingInputs couplingInputs();
+  /// The inputs written are also the state at the start: eps^n <- eps^{n+1} (the first step sees
+  /// no d(eps)/dt from the constructor's eps = 1), and eps gets its ghosts now (one exchange), so
+  /// that the coupling can read it before the first step. Collective; once, before the first
+  /// step.
+  void startCoupling();
+  /// For inputs written through fields(): eps or K changed (what couplingInputs() implies).
   void markCoefficientsChanged();
-  /// eps^n <- eps (owned cells): call once after writing the initial eps, before the first step,
-  /// so that the first step sees no d(eps)/dt from the constructor's eps = 1.
+  /// For inputs written through fields(): eps^n <- eps, ghosts as they are (startCoupling()
+  /// without the exchange).
   void syncEpsOld();
   /// Advance one step of size dt.
   void step(double dt);

@@ -1,0 +1,35 @@
+// fv/src/params.hpp — the fluid's case-file keys, parsed once into typed values (private).
+//
+// fluidParams() reads every "fluid.*" key the solver uses (and gravity) when the solver is built;
+// the step reads only these members, never a key.
+#pragma once
+
+#include "boundary.hpp"
+#include "coloc/core/config.hpp"
+#include "coloc/partition/decomposition.hpp"
+#include "momentum.hpp"
+#include "pressure_solver.hpp"
+
+namespace coloc::fv {
+
+struct FluidParams {
+  double nu = 0;          // fluid.nu (m^2/s)
+  double dtFixed = 0;     // fluid.dt (s): the step, or the largest adaptive step
+  bool adaptive = false;  // fluid.adaptive_dt
+  double cfl = 0;         // fluid.cfl: target of the adaptive step
+  double cflMax = 0;      // fluid.cfl_max: hard limit (error)
+  double steadyTol = 0;   // fluid.steady_tol
+  bool ab2 = true;        // fluid.time_scheme == ab2
+  Real3 g{0, 0, 0};       // gravity + fluid.body_force (m/s^2)
+  Real3 initialVelocity{0, 0, 0};
+  Convection convection = Convection::VanLeer;  // fluid.convection, fluid.limiter
+  PressureSolver::Kind solver = PressureSolver::Kind::Pfmg;
+  double pressureTol = 0;   // fluid.pressure.tol
+  int pressureMaxIter = 0;  // fluid.pressure.max_iter
+  BoxBc bc;                 // fluid.boundary.*, fluid.patches
+};
+
+/// Reads and checks the keys (ConfigError naming the key).
+FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid);
+
+}  // namespace coloc::fv

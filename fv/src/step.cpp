@@ -1,0 +1,392 @@
+// The fluid step (SPEC section 1) as its verbs; the choices are documented in docs/fv.md.
+//
+//   u* = (eps^n u^n / dt + E + eps^{n+1} g + K u_p) / (eps^{n+1}/dt + K)        predictVelocity
+//   sum_f w_f (q_P - q_nb) = -div(eps^{n+1} u*) - (eps^{n+1} - eps^n)/dt       assemblePressureRhs
+//   q = p dt                                                                   solvePressure
+//   u^{n+1} = u* - eps_f/(eps_f + K_f dt) grad q                                project
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "coloc/core/failure.hpp"
+#include "fluid_impl.hpp"
+
+namespace coloc::fv {
+
+void FluidSolver::Impl::step(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw Error("fluid step: invalid dt " + std::to_string(dt));
+  exchangeInputs();
+  if (!uGhostsFresh) fillGhosts();
+  predictVelocity(dt);
+  assemblePressureRhs(dt);
+  solvePressure();
+  project(dt);
+  recordBalances();
+  finishStep(dt);
+}
+
+void FluidSolver::Impl::exchangeInputs() {
+  {
+    ScopedPhase t(timers, Phase::FluidHalo);
+    Field3<double>* cells[6] = {&f.eps, &f.epsOld, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
+    cellHalo.gather(std::span<Field3<double>* const>(cells, 6), &timers, Exchange::IntraPhysics);
+  }
+  ScopedPhase t(timers, Phase::FluidBoundary);
+  applyScalarBc(dec, f.eps);
+  applyScalarBc(dec, f.epsOld);
+  applyScalarBc(dec, f.K);
+  for (auto& k : f.KUp) applyScalarBc(dec, k);
+  epsGhostsFresh = true;
+}
+
+void FluidSolver::Impl::fillGhosts() {
+  if (superficialInlet && !epsGhostsFresh) {
+    {
+      ScopedPhase t(timers, Phase::FluidHalo);
+      cellHalo.gather(f.eps, &timers, Exchange::IntraPhysics);
+    }
+    ScopedPhase t(timers, Phase::FluidBoundary);
+    applyScalarBc(dec, f.eps);
+    epsGhostsFresh = true;
+  }
+  {
+    ScopedPhase t(timers, Phase::FluidHalo);
+    for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
+  }
+  ScopedPhase t(timers, Phase::FluidBoundary);
+  for (int c = 0; c < 3; ++c) applyVelocityBc(dec, bc, c, f.u[c], &f.eps);
+  uGhostsFresh = true;
+}
+void FluidSolver::Impl::assembleMatrix(double dt) {
+  // Row of cell P: sum_f w_f (q_P - q_nb), w_f = eps_f^2 / ((eps_f + K_f dt) h_d^2), q = p dt.
+  // An outlet face (Dirichlet p at the face, half a cell away) doubles w and moves the known
+  // value to the right-hand side; inlet, wall and slip faces contribute nothing (dp/dn = 0).
+  const Int3 n = dec.cells();
+  const CellField& e = f.eps;
+  const CellField& K = f.K;
+  std::size_t r = 0;
+  bool localK = false;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i, ++r) {
+        double* row = &matrix[7 * r];
+        double diag = 0;
+        const int idx[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a) {
+          const std::ptrdiff_t s = strideOf(e, a);
+          const std::ptrdiff_t c = e.index(i, j, k);
+          for (int side = 0; side < 2; ++side) {
+            const bool boundary = side == 0 ? (dec.atLowBoundary(a) && idx[a] == 0)
+                                            : (dec.atHighBoundary(a) && idx[a] == n[a] - 1);
+            double w = 0;
+            const std::ptrdiff_t nb = c + (side == 0 ? -s : s);
+            const double ef = 0.5 * (e.data()[c] + e.data()[nb]);
+            const double kf = 0.5 * (K.data()[c] + K.data()[nb]);
+            if (kf != 0.0) localK = true;
+            if (!boundary) {
+              w = ef * ef / ((ef + kf * dt) * h[a] * h[a]);
+              row[1 + 2 * a + side] = -w;
+            } else {
+              row[1 + 2 * a + side] = 0.0;
+              if (bc.atLocal(dec, a, side, i, j, k).type == BcType::Outlet)
+                w = outletWeight(ef, kf, dt, h[a]);
+            }
+            diag += w;
+          }
+        }
+        row[0] = diag;
+      }
+  anyK = dec.comm().max(localK ? 1 : 0) == 1;  // the same rebuild decision on every rank
+  ps->setMatrix(matrix);
+  matrixDt = dt;
+  coefficientsChanged = false;
+}
+void FluidSolver::Impl::computeRates(double dt) {
+  // CFL per cell: dt sum_d max(|u_lo|,|u_hi|)/h_d; NaN/Inf anywhere stops the run; the steady
+  // residual is max|u^{n+1}-u^n| / max|u^{n+1}|.
+  const Int3 n = dec.cells();
+  double rate = 0, du = 0, umax = 0;
+  Int3 at{0, 0, 0};
+  std::string err;
+  for (int k = 0; k < n[2] && err.empty(); ++k)
+    for (int j = 0; j < n[1] && err.empty(); ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        double r = 0;
+        for (int a = 0; a < 3; ++a) {
+          const auto& U = f.u[a];
+          const double lo = U(i, j, k);
+          const double hi = U(i + (a == 0), j + (a == 1), k + (a == 2));
+          if (!std::isfinite(lo) || !std::isfinite(hi)) {
+            char buf[256];
+            std::snprintf(buf, sizeof buf,
+                          "fluid step %lld: non-finite velocity u_%c = %g at cell (%d, %d, %d) "
+                          "(global index)",
+                          steps, "xyz"[a], std::isfinite(lo) ? hi : lo, dec.lo()[0] + i,
+                          dec.lo()[1] + j, dec.lo()[2] + k);
+            err = buf;
+            break;
+          }
+          r += std::max(std::fabs(lo), std::fabs(hi)) / h[a];
+          umax = std::max(umax, std::fabs(lo));
+          if (dt > 0) du = std::max(du, std::fabs(lo - uPrev[a](i, j, k)));
+        }
+        if (!err.empty()) break;
+        if (r > rate) rate = r, at = {i, j, k};
+      }
+  if (err.empty() && dt > 0 && rate * dt > prm.cflMax) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "fluid step %lld: CFL %g at cell (%d, %d, %d) (global index) exceeds "
+                  "fluid.cfl_max = %g (dt = %g s): reduce fluid.dt or use fluid.adaptive_dt",
+                  steps, rate * dt, dec.lo()[0] + at[0], dec.lo()[1] + at[1], dec.lo()[2] + at[2],
+                  prm.cflMax, dt);
+    err = buf;
+  }
+  // One allreduce for the check and the rates: the largest rate, change and speed, and whether
+  // any rank failed (then every rank takes the error path of raiseIfAny). A failing rank arms
+  // the failure deadline first, as raiseIfAny would before it waits.
+  if (!err.empty()) noteLocalFailure(err, 3);
+  double v[4] = {rate, du, umax, err.empty() ? 0.0 : 1.0};
+  dec.comm().maxInPlace(std::span<double>(v, 4));
+  if (v[3] > 0) dec.comm().raiseIfAny(err);
+  maxRate = v[0];
+  umaxLast = v[2];
+  cflLast = v[0] * dt;
+  if (dt > 0) steadyResidual = v[2] > 0 ? v[1] / v[2] : 0.0;
+}
+void FluidSolver::Impl::boundaryFluxes(double& in, double& out) const {
+  // Volume fluxes eps_f u_n A through the physical faces of this block: into the box (in) and
+  // out of it (out), signed, so in - out = d/dt int eps dV when continuity holds.
+  in = out = 0;
+  const Int3 n = dec.cells();
+  for (int a = 0; a < 3; ++a) {
+    const double area = dec.grid().cellVolume() / h[a];
+    for (int s = 0; s < 2; ++s) {
+      if (s == 0 ? !dec.atLowBoundary(a) : !dec.atHighBoundary(a)) continue;
+      IndexBox b{{0, 0, 0}, n};
+      b.lo[a] = s == 0 ? 0 : n[a];
+      b.hi[a] = b.lo[a] + 1;
+      const auto& U = f.u[a];
+      double sum = 0;
+      forEach(b, [&](int i, int j, int k) {
+        const int ci = s == 0 ? i : i - (a == 0), cj = s == 0 ? j : j - (a == 1),
+                  ck = s == 0 ? k : k - (a == 2);
+        sum += f.eps(ci, cj, ck) * U(i, j, k) * area;  // boundary face eps = cell eps
+      });
+      if (s == 0)
+        in += sum;
+      else
+        out += sum;
+    }
+  }
+}
+
+void FluidSolver::Impl::predictVelocity(double dt) {
+  // u* = (eps^n u^n/dt + E + eps^{n+1} g + KUp) / (eps^{n+1}/dt + K) with the explicit terms
+  // E = AB2 (or Euler) of H = -div(eps u u) + div(eps nu (grad u + grad u^T)), evaluated with
+  // eps^n and u^n for all three components before any is updated.
+  {
+    ScopedPhase t(timers, Phase::FluidMomentum);
+    massFluxes(f.u, f.epsOld, M);
+    const bool useAb2 = prm.ab2 && haveOld;
+    const double r = useAb2 ? dt / dtOld : 0.0;
+    const double ca = useAb2 ? 1.0 + 0.5 * r : 1.0, cb = useAb2 ? -0.5 * r : 0.0;
+    const double idt = 1.0 / dt;
+    for (int c = 0; c < 3; ++c) explicitTerms(c, f.u, M, f.epsOld, mom, interiorFaces(c), Hn[c]);
+    for (int c = 0; c < 3; ++c) {
+      const IndexBox box = interiorFaces(c);
+      auto& U = f.u[c];
+      auto& P = uPrev[c];
+      const std::ptrdiff_t cs = strideOf(f.eps, c);
+      const double* en = f.eps.data().data();
+      const double* eo = f.epsOld.data().data();
+      const double* kk = f.K.data().data();
+      const double* kup = f.KUp[c].data().data();
+      double* up = U.data().data();
+      double* pp = P.data().data();
+      const double* hn = Hn[c].data().data();
+      const double* ho = Ho[c].data().data();
+      const double gc = prm.g[c];
+      for (int k = box.lo[2]; k < box.hi[2]; ++k)
+        for (int j = box.lo[1]; j < box.hi[1]; ++j) {
+          const std::ptrdiff_t q0 = U.index(box.lo[0], j, k), c0 = f.eps.index(box.lo[0], j, k),
+                               h0 = Hn[c].index(box.lo[0], j, k);
+          for (int i = 0; i < box.hi[0] - box.lo[0]; ++i) {
+            const std::ptrdiff_t q = q0 + i, cc = c0 + i, hh = h0 + i;
+            const double efn = 0.5 * (en[cc - cs] + en[cc]);
+            const double efo = 0.5 * (eo[cc - cs] + eo[cc]);
+            const double kf = 0.5 * (kk[cc - cs] + kk[cc]);
+            const double kupf = 0.5 * (kup[cc - cs] + kup[cc]);
+            const double E = ca * hn[hh] + cb * ho[hh];
+            pp[q] = up[q];
+            up[q] = (efo * up[q] * idt + E + efn * gc + kupf) / (efn * idt + kf);
+          }
+        }
+      predictBoxFaces(dec, bc, c, U, P);
+    }
+    std::swap(Hn, Ho);
+  }
+  // u* on the faces of the block's high side that belong to the neighbour (face n of a
+  // periodic or interior block edge) enters div(eps u*).
+  ScopedPhase t(timers, Phase::FluidHalo);
+  for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
+}
+
+void FluidSolver::Impl::assemblePressureRhs(double dt) {
+  // Row of cell P for q = p dt: sum_f w_f (q_P - q_nb) = -div(eps^{n+1} u*) - (eps^{n+1}-eps^n)/dt;
+  // an outlet face moves its known q_b = p_out dt to the right-hand side.
+  ScopedPhase t(timers, Phase::FluidPressureAssemble);
+  if (coefficientsChanged || (anyK && dt != matrixDt) || matrixDt < 0) assembleMatrix(dt);
+  const Int3 n = dec.cells();
+  std::size_t r = 0;
+  double sum = 0, dvol = 0, dvolGross = 0, scale2 = 0;
+  Int3 badCell{-1, -1, -1};
+  double badValue = 0;
+  const double idt = 1.0 / dt;
+  const double* en = f.eps.data().data();
+  const double* eo = f.epsOld.data().data();
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i, ++r) {
+        const std::ptrdiff_t c = f.eps.index(i, j, k);
+        double div = 0, flux = 0;
+        const int idx[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a) {
+          const auto& U = f.u[a];
+          const std::ptrdiff_t s = strideOf(f.eps, a);
+          const std::ptrdiff_t q = U.index(i, j, k), qs = strideOf(U, a);
+          const double elo = 0.5 * (en[c - s] + en[c]), ehi = 0.5 * (en[c] + en[c + s]);
+          div += (ehi * U.data()[q + qs] - elo * U.data()[q]) / h[a];
+          flux += (std::fabs(ehi * U.data()[q + qs]) + std::fabs(elo * U.data()[q])) / h[a];
+          for (int side = 0; side < 2; ++side) {
+            const bool boundary = side == 0 ? (dec.atLowBoundary(a) && idx[a] == 0)
+                                            : (dec.atHighBoundary(a) && idx[a] == n[a] - 1);
+            if (!boundary) continue;
+            const FaceBc& fb = bc.atLocal(dec, a, side, i, j, k);
+            if (fb.type == BcType::Outlet)
+              div -= outletWeight(en[c], f.K.data()[c], dt, h[a]) * fb.pressure * dt;
+          }
+        }
+        const double de = en[c] - eo[c];
+        rhs[r] = -div - de * idt;
+        if (!std::isfinite(rhs[r]) && badCell[0] < 0) {
+          badCell = {dec.lo()[0] + i, dec.lo()[1] + j, dec.lo()[2] + k};
+          badValue = rhs[r];
+        }
+        const double sc = flux + std::fabs(de) * idt;
+        scale2 += sc * sc;
+        dvol += de;
+        dvolGross += std::fabs(de);
+        sum += rhs[r];
+        sol[r] = f.p.data()[c] * dt;  // warm start
+      }
+  dVolLocal = dvol * dec.grid().cellVolume() / dt;
+  dVolGrossLocal = dvolGross * dec.grid().cellVolume() / dt;
+  rhsScaleLast = std::sqrt(dec.comm().sum(scale2));
+  if (!std::isfinite(rhsScaleLast)) {
+    // Every rank sees the non-finite global sum; the ranks that own a bad cell say where.
+    std::string err;
+    if (badCell[0] >= 0) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf,
+                    "fluid step %lld: non-finite velocity after the predictor: divergence %g at "
+                    "cell (%d, %d, %d) (global index)",
+                    steps + 1, badValue, badCell[0], badCell[1], badCell[2]);
+      err = buf;
+    }
+    dec.comm().raiseIfAny(err);
+    throw Error("fluid step " + std::to_string(steps + 1) + ": non-finite velocity");
+  }
+  if (singular) {
+    // All faces Neumann or periodic: remove the (round-off, or physically inconsistent) mean.
+    const double mean = dec.comm().sum(sum) / static_cast<double>(dec.grid().cellCount());
+    for (auto& v : rhs) v -= mean;
+  }
+}
+
+void FluidSolver::Impl::solvePressure() {
+  ScopedPhase t(timers, Phase::FluidPressureSolve);
+  const double scale = rhsScaleLast;
+  itLast = ps->solve(rhs, sol, scale);
+  resLast = scale > 0 ? ps->lastResidualNorm() / scale : 0.0;
+  itSum += itLast;
+  ++solves;
+  itMax = std::max(itMax, itLast);
+}
+
+void FluidSolver::Impl::project(double dt) {
+  const Int3 n = dec.cells();
+  {
+    ScopedPhase t(timers, Phase::FluidProject);
+    std::size_t r = 0;
+    double mean = 0;
+    if (singular) {
+      double s = 0;
+      for (double v : sol) s += v;
+      mean = dec.comm().sum(s) / static_cast<double>(dec.grid().cellCount());
+    }
+    const double idt = 1.0 / dt;
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i, ++r) f.p(i, j, k) = (sol[r] - mean) * idt;
+  }
+  {
+    ScopedPhase t(timers, Phase::FluidHalo);
+    cellHalo.gather(f.p, &timers, Exchange::IntraPhysics);
+  }
+  ScopedPhase t(timers, Phase::FluidProject);
+  const double* en = f.eps.data().data();
+  const double* kk = f.K.data().data();
+  const double* pp = f.p.data().data();
+  for (int c = 0; c < 3; ++c) {
+    auto& U = f.u[c];
+    double* up = U.data().data();
+    const std::ptrdiff_t cs = strideOf(f.eps, c);
+    const double ih = dt / h[c];
+    forFaces(U, f.eps, interiorFaces(c), [&](std::ptrdiff_t q, std::ptrdiff_t cc) {
+      const double ef = 0.5 * (en[cc - cs] + en[cc]);
+      const double kf = 0.5 * (kk[cc - cs] + kk[cc]);
+      up[q] -= ef / (ef + kf * dt) * (pp[cc] - pp[cc - cs]) * ih;
+    });
+    projectOutletFaces(dec, bc, c, U, f.eps, f.K, f.p, dt, ih);
+  }
+  uGhostsFresh = false;
+}
+
+void FluidSolver::Impl::recordBalances() {
+  boundaryFluxes(inLocal, outLocal);
+  // Drag the fluid received this step (per unit fluid density, m^4/s^2): on every face that the
+  // predictor advanced, V (KUp_f - K_f u_f^{n+1}) -- the semi-implicit drag is exactly implicit
+  // in u^{n+1} once projected (A u^{n+1} = ... + K u_p - eps grad p).
+  dragLocal = {0, 0, 0};
+  if (!anyK) return;
+  ScopedPhase t(timers, Phase::FluidProject);
+  const double vol = dec.grid().cellVolume();
+  for (int c = 0; c < 3; ++c) {
+    const auto& U = f.u[c];
+    const std::ptrdiff_t cs = strideOf(f.eps, c);
+    const double* kk = f.K.data().data();
+    const double* kup = f.KUp[c].data().data();
+    const double* up = U.data().data();
+    double sum = 0;
+    forFaces(U, f.eps, interiorFaces(c), [&](std::ptrdiff_t q, std::ptrdiff_t cc) {
+      sum += 0.5 * (kup[cc - cs] + kup[cc]) - 0.5 * (kk[cc - cs] + kk[cc]) * up[q];
+    });
+    dragLocal[c] = sum * vol;
+  }
+}
+
+void FluidSolver::Impl::finishStep(double dt) {
+  // eps^n <- eps^{n+1} (ghosts included: they are current).
+  std::copy(f.eps.data().begin(), f.eps.data().end(), f.epsOld.data().begin());
+  time += dt;
+  ++steps;
+  dtOld = dt;
+  dtLast = dt;
+  haveOld = true;
+  computeRates(dt);
+  ratesStale = false;
+}
+
+}  // namespace coloc::fv
