@@ -9,6 +9,7 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/run_config.hpp"
+#include "coloc/coupling/self_velocity.hpp"
 #include "coloc/fv/fluid.hpp"
 #include "coloc/partition/setup.hpp"
 
@@ -117,6 +118,8 @@ std::vector<std::string> checkCase(const Config& cfg) {
   checkName(cfg);
   checkTimeSteps(cfg, notes);
   checkBoundaries(cfg, notes);
+  const std::string mode = cfg.string("run.mode");
+  if (mode == "coupled" || mode == "dummy_dem") selfVelocityFromConfig(cfg);
   if (cfg.integer("run.steps") > 0 && cfg.number("run.end_time") > 0)
     notes.push_back("run.steps = " + std::to_string(cfg.integer("run.steps")) +
                     " is given: run.end_time is not used");

@@ -10,6 +10,7 @@
 #include "coloc/core/error.hpp"
 #include "coloc/core/fault.hpp"
 #include "coloc/coupling/checkpoint.hpp"
+#include "coloc/coupling/self_velocity.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -26,6 +27,12 @@ void declareConfig(Schema& s) {
             "passes of a conservative diffusion filter (alpha 1/8) on the deposited fields and, "
             "adjointly, on the fields sampled at the particles (0: off)",
             Range::nonNegative());
+  s.string("coupling.self_velocity", "none",
+           "correction of the self-induced velocity (the particle's own drag reaction in the fluid "
+           "it samples): none, or stokeslet (regularised Stokeslet of Balachandar, Liu & Lakhote "
+           "2019 with this solver's response to the trilinear deposit, built up since the run's "
+           "start; trilinear kernel, no smoothing, cubic cells; docs/coupling.md)",
+           {"none", "stokeslet"});
   s.integer("coupling.dem_substeps", 0,
             "DEM steps per step. coupled, dummy_dem: the CFD step is dem_substeps * particles.dt "
             "(fluid.dt and fluid.adaptive_dt are then not used); 0: the largest whole number of "
@@ -238,6 +245,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
 
   kernel_ = kernelFromName(cfg.string("coupling.kernel"));
   drag_ = dragLawFromName(cfg.string("coupling.drag"));
+  selfVelocity_ = selfVelocityFromConfig(cfg);
   epsMin_ = cfg.number("coupling.eps_min");
   smoothingPasses_ = static_cast<int>(cfg.integer("coupling.smoothing_passes"));
   rhoF_ = cfg.number("fluid.rho");
@@ -539,6 +547,7 @@ void Simulation::evaluateDrag(double dt) {
   const ParticleView& p = view_;
   const std::size_t n = stencils_.count();
   const bool frozen = mode_ == RunMode::DummyDem;
+  std::string err;
   for (std::size_t i = 0; i < n; ++i) {
     double slip2 = 0;
     for (int d = 0; d < 3; ++d) {
@@ -546,11 +555,17 @@ void Simulation::evaluateDrag(double dt) {
       slip2 += s * s;
     }
     const double eps = std::clamp(epsAt_[i], epsMin_, 1.0);
-    const double beta =
-        dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
-    if (frozen || dt <= 0) {
+    const bool still = frozen || dt <= 0;
+    double beta = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
+    // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
+    // (self_velocity.hpp); c = 0 without the correction.
+    double denom = still ? 1.0 : 1.0 + dt * beta / p.mass[i];
+    if (selfVelocity_ != SelfVelocity::None)
+      denom = correctForSelfVelocity(i, eps, std::sqrt(slip2), still ? 0.0 : dt,
+                                     time_ + std::max(dt, 0.0), beta, err);
+    if (still) {
       // Particles that cannot move: the plain coefficient and their (zero) velocity.
-      beta_[i] = beta;
+      beta_[i] = beta / denom;
       for (int d = 0; d < 3; ++d) vDep_[d][i] = p.v[d][i];
     } else {
       // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
@@ -558,13 +573,47 @@ void Simulation::evaluateDrag(double dt) {
       // acceleration: contacts and gravity (the DEM's last total force less the coupling force
       // it held) and the pressure-gradient force -V rho_f grad p^n.
       const double m = p.mass[i];
-      beta_[i] = beta / (1.0 + dt * beta / m);
+      beta_[i] = beta / denom;
       for (int d = 0; d < 3; ++d) {
         const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
         vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
       }
     }
   }
+  if (selfVelocity_ != SelfVelocity::None) dec_.comm().raiseIfAny(err);
+}
+
+double Simulation::correctForSelfVelocity(std::size_t i, double eps, double slipSampled, double dt,
+                                          double tRun, double& beta, std::string& err) const {
+  // The drag law sees the undisturbed slip |u_at + c F - v| = slip / (1 - c beta'), beta' the
+  // coefficient with the particle's implicit response; a few fixed-point passes (beta depends on
+  // the slip only through Re; at Re << 1 the first pass is exact).
+  const ParticleView& p = view_;
+  const double h = dec_.grid().spacing(0), mu = rhoF_ * nu_, d = 2.0 * p.radius[i];
+  std::array<double, 3> dir{0.0, 0.0, 1.0}, t{};
+  if (slipSampled > 0)
+    for (int a = 0; a < 3; ++a) dir[a] = (uAt_[a][i] - p.v[a][i]) / slipSampled;
+  for (int a = 0; a < 3; ++a) t[a] = stencils_.fraction(a, i);
+  const double c = selfMobility(t, dir, h, mu, nu_, eps, tRun);
+  const double inertia = dt > 0 ? dt / p.mass[i] : 0.0;
+  double denom = 1.0 + inertia * beta;
+  for (int pass = 0; pass < 3; ++pass) {
+    const double cb = c * beta / (1.0 + inertia * beta);  // c beta'
+    if (!(cb < 0.5)) {
+      if (err.empty()) {
+        std::ostringstream os;
+        os << "coupling.self_velocity: particle " << p.id[i] << " (d/h = " << d / h
+           << ") is too large for the correction (its self-induced velocity would be "
+           << cb << " of its slip, the model holds below 0.5); use larger particles' cells or "
+           << "coupling.self_velocity = none";
+        err = os.str();
+      }
+      return denom;
+    }
+    if (drag_ == DragLaw::Stokes) break;
+    beta = dragCoefficient(drag_, eps, d, slipSampled / (1.0 - cb), rhoF_, nu_);
+  }
+  return 1.0 + inertia * beta - c * beta;
 }
 
 void Simulation::depositParticles() {

@@ -16,7 +16,8 @@ namespace coloc::coupling {
 ///  - name: a plain name (it becomes the folder out/<name>): not empty, no '/', not . or ..;
 ///  - a coupled run with a fixed fluid.dt that is not a whole multiple of particles.dt (the CFD
 ///    step is a whole number of DEM steps; the run would silently use another step);
-///  - an inlet with no outlet face (the inflow has nowhere to go).
+///  - an inlet with no outlet face (the inflow has nowhere to go);
+///  - coupling.self_velocity where it does not apply (self_velocity.hpp).
 /// Returns notes: where what runs differs from a key's face value (announced by the driver on
 /// rank 0 and stored in report.json under run.notes).
 std::vector<std::string> checkCase(const Config& cfg);

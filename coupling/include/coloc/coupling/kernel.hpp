@@ -37,6 +37,9 @@ class Stencils {
                     std::span<const double> x, std::span<const double> y, std::span<const double> z,
                     std::size_t n);
   int width() const { return width_; }
+  /// Trilinear: the fractional offset (0..1) of particle p from its first cell's centre along
+  /// axis d (0 for the centroid kernel).
+  double fraction(int d, std::size_t p) const { return width_ == 1 ? 0.0 : frac_[d][p]; }
   std::size_t count() const { return n_; }
   /// Calls f(cell, weight) for the cells of particle p: cell is a linear index into
   /// Field3::data(), the weights sum to 1. A stencil is stored compactly (28 bytes a particle for

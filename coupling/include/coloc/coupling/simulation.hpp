@@ -56,6 +56,7 @@
 #include "coloc/core/timers.hpp"
 #include "coloc/coupling/drag.hpp"
 #include "coloc/coupling/kernel.hpp"
+#include "coloc/coupling/self_velocity.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
 #include "coloc/io/output.hpp"
@@ -174,6 +175,11 @@ class Simulation {
   void computeStencils();
   void sampleFluidForDrag();
   void evaluateDrag(double dt);
+  /// coupling.self_velocity: beta re-evaluated at the undisturbed slip; returns
+  /// 1 + dt beta / m - c beta (self_velocity.hpp; dt = 0 for particles that cannot move), c at
+  /// tRun after the run's start. A particle too large for the model sets err.
+  double correctForSelfVelocity(std::size_t i, double eps, double slipSampled, double dt,
+                                double tRun, double& beta, std::string& err) const;
   void depositParticles();
   void sumDepositsAcrossBlocks();
   void updateFluidCoefficients();
@@ -224,6 +230,7 @@ class Simulation {
   // Coupling parameters.
   KernelKind kernel_ = KernelKind::Trilinear;
   DragLaw drag_ = DragLaw::DiFelice;
+  SelfVelocity selfVelocity_ = SelfVelocity::None;
   double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6, steadyTol_ = 0;
   bool coupled_ = false;
 
