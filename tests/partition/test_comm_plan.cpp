@@ -181,3 +181,55 @@ TEST(CommPlan, RejectsBadRank) {
   // Every rank throws before any message: nothing is left pending.
   EXPECT_THROW(CommPlan::fromDestinations(comm, dest), Error);
 }
+
+// ---- remapFields: cell and face fields between two decompositions of the same grid ----------
+
+#include "coloc/partition/remap.hpp"
+
+namespace {
+
+double code(int d, int i, int j, int k) {
+  return d * 1e6 + i * 1e4 + j * 100 + k;
+}
+
+}  // namespace
+
+TEST(Remap, CellsAndFacesBetweenDecompositions) {
+  const Comm comm = Comm::world();
+  for (bool periodic : {false, true}) {
+    GlobalGrid g;
+    g.cells = {9, 5, 7};
+    g.periodic = {periodic, false, periodic};
+    const Decomposition a = Decomposition::uniform(comm, g);
+    // Uneven cuts along the axis the uniform blocks split most.
+    const Int3 dims = a.dims();
+    std::array<std::vector<int>, 3> cuts;
+    for (int d = 0; d < 3; ++d) {
+      cuts[d] = Decomposition::evenCuts(g.cells[d], dims[d]);
+      if (dims[d] > 1) cuts[d][1] = 1;  // a thin first block
+    }
+    const Decomposition b = Decomposition::fromCuts(comm, g, cuts);
+    for (int stagger = -1; stagger < 3; ++stagger) {
+      const FieldLayout la = stagger < 0 ? cellLayout(a, 1) : faceLayout(a, stagger, 1);
+      const FieldLayout lb = stagger < 0 ? cellLayout(b, 1) : faceLayout(b, stagger, 1);
+      Field3<double> f0(la, -1.0), f1(la, -1.0), h0(lb, -2.0), h1(lb, -2.0);
+      const IndexBox own = ownedGlobalBox(a, a.rank(), stagger);
+      forEach(own, [&](int i, int j, int k) {
+        const Int3 lo = a.lo();
+        f0(i - lo[0], j - lo[1], k - lo[2]) = code(0, i, j, k);
+        f1(i - lo[0], j - lo[1], k - lo[2]) = code(1, i, j, k);
+      });
+      const Field3<double>* src[] = {&f0, &f1};
+      Field3<double>* dst[] = {&h0, &h1};
+      remapFields(a, src, b, dst, stagger);
+      const IndexBox mine = ownedGlobalBox(b, b.rank(), stagger);
+      forEach(mine, [&](int i, int j, int k) {
+        const Int3 lo = b.lo();
+        ASSERT_EQ(h0(i - lo[0], j - lo[1], k - lo[2]), code(0, i, j, k)) << stagger;
+        ASSERT_EQ(h1(i - lo[0], j - lo[1], k - lo[2]), code(1, i, j, k)) << stagger;
+      });
+      // Ghosts untouched.
+      EXPECT_EQ(h0(-1, 0, 0), -2.0);
+    }
+  }
+}
