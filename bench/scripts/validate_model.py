@@ -11,7 +11,8 @@ fastest run of each set (the least disturbed; --pick median), calibrates from th
 ONLY (the 2-rank runs are never fitted), predicts 1 and 2 ranks (--ranks: more) with the
 measured ping-pong and stream profile and prints, per point, the model and measured step time
 and shares (fluid, DEM, coupling, inter-physics, wait) with their errors, PASS/FAIL against
-15 % (a share: 15 % of the measured share, or 1.5 points where that is larger). `uptime` is recorded before and after.
+15 % (a share: 15 % of the measured share, or 1.5 points where that is larger). `uptime` is
+recorded before and after.
 Writes OUT/validate-CASE.{csv,txt} and OUT/validate-costs-CASE.json.
 
   bench/scripts/validate_model.py                      # runs everything (a few minutes, quiet)
