@@ -347,7 +347,8 @@ def main():
         if r["ranks"] == 1:
             serial = r["step_s"]
     keys = ["strategy", "ranks", "step_s", "speedup", "fluid", "dem", "coupling", "inter_physics",
-            "wait", "imbalance", "pressure", "memory_contention", "fluid_of_busy", "dem_of_busy", "coupling_of_busy",
+            "wait", "imbalance", "pressure", "memory_contention", "fluid_of_busy", "dem_of_busy",
+            "coupling_of_busy",
             "inter_physics_of_busy"]
     for r in out:
         r["speedup"] = serial / r["step_s"] if serial else float("nan")

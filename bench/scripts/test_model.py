@@ -3,7 +3,6 @@
 (no MPI, no coloc run; deterministic). Every expected number is worked out by hand below; the
 test exits 1 on the first mismatch. CTest: model_unit (label unit)."""
 import json
-import math
 import os
 import shutil
 import subprocess
@@ -13,7 +12,6 @@ import tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import model  # noqa: E402
-import validate_model  # noqa: E402
 
 FAILS = []
 

@@ -7,11 +7,12 @@ For each case (default case2-small and case3-small) it runs, --repeats times eac
   np2        mpirun -n 2 coloc run CASE                      (the point to predict)
 and once: bench_stream on every core (memory contention), bench_fv BM_PressureSolve/{32,64}/0
 on 1 and 2 ranks (hypre's per-level overhead), `coloc plan CASE --ranks 1,2`. It takes the
-fastest run of each set (the least disturbed; --pick median), calibrates from the 1-rank runs ONLY (the
-2-rank runs are never fitted), predicts 1 and 2 ranks with the measured ping-pong and stream
-profile and prints, per point, the model and measured step time and shares (fluid, DEM,
-coupling, inter-physics, wait) with their errors, PASS/FAIL against 15 % (a share: 15 % of the
-measured share, or 1.5 points where that is larger). `uptime` is recorded before and after.
+fastest run of each set (the least disturbed; --pick median), calibrates from the 1-rank runs
+ONLY (the 2-rank runs are never fitted), predicts 1 and 2 ranks (--ranks: more) with the
+measured ping-pong and stream profile and prints, per point, the model and measured step time
+and shares (fluid, DEM, coupling, inter-physics, wait) with their errors, PASS/FAIL against
+15 % (a share: 15 % of the measured share, or 1.5 points where that is larger). `uptime` is
+recorded before and after.
 Writes OUT/validate-CASE.{csv,txt} and OUT/validate-costs-CASE.json.
 
   bench/scripts/validate_model.py                      # runs everything (a few minutes, quiet)
@@ -26,7 +27,6 @@ import glob
 import json
 import os
 import signal
-import statistics
 import subprocess
 import sys
 import time
@@ -218,10 +218,11 @@ def validate_case(a, runs, case, out_dir):
                 ok_all = ok_all and ok
             rows.append([name, P, a.timer, q, mv, xv, err, tag])
             if q == "step_s":
-                lines.append("%-6d %-14s %11.5f %11.5f %+8.1f%%  %s" % (P, q, mv, xv, 100 * err, tag))
+                lines.append("%-6d %-14s %11.5f %11.5f %+8.1f%%  %s" %
+                             (P, q, mv, xv, 100 * err, tag))
             else:
-                lines.append("%-6d %-14s %10.1f%% %10.1f%% %+7.1fpt  %s" % (P, q, 100 * mv, 100 * xv,
-                                                                          100 * err, tag))
+                lines.append("%-6d %-14s %10.1f%% %10.1f%% %+7.1fpt  %s" %
+                             (P, q, 100 * mv, 100 * xv, 100 * err, tag))
         lines.append("%-6d %-14s %11s %11.2f   (measured PCG iterations a step; the model uses "
                      "the 1-rank count %.2f)" % (P, "iterations", "", its,
                                                 costs["pressure_iterations_per_step"]))
@@ -256,7 +257,7 @@ def main():
     ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
     ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
     ap.add_argument("--pick", choices=["min", "median"], default="min",
-                    help="the fastest run of each set (least disturbed by other jobs) or the median")
+                    help="the fastest run of each set (least disturbed) or the median")
     ap.add_argument("--runs", default="/tmp/coloc-validate")
     ap.add_argument("--reports", help="take the reports under this folder; run nothing")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench/results/model"))
