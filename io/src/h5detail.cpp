@@ -164,8 +164,9 @@ std::string context(const H5File& f, const std::string& path) {
 Hid mpioFapl(const FlatComm& comm, bool collectiveWrites) {
   Hid fapl = plist(H5P_FILE_ACCESS, "H5Pcreate(fapl)");
   checkErr(H5Pset_fapl_mpio(fapl, comm.get(), MPI_INFO_NULL), "H5Pset_fapl_mpio");
-  checkErr(H5Pset_all_coll_metadata_ops(fapl, 1), "H5Pset_all_coll_metadata_ops");
-  if (collectiveWrites) checkErr(H5Pset_coll_metadata_write(fapl, 1), "H5Pset_coll_metadata_write");
+  checkErr(H5Pset_all_coll_metadata_ops(fapl, true), "H5Pset_all_coll_metadata_ops");
+  if (collectiveWrites)
+    checkErr(H5Pset_coll_metadata_write(fapl, true), "H5Pset_coll_metadata_write");
   return fapl;
 }
 
