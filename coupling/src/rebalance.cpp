@@ -128,8 +128,8 @@ std::unique_ptr<Simulation> applyRebalanceThroughFile(std::unique_ptr<Simulation
   const bool root = comm.isRoot();
   sim.reset();
   auto next = std::make_unique<Simulation>(cfg, std::move(layouts), scratch);
+  if (root) std::remove(scratch.c_str());  // every rank closed it in the constructor
   next->decomposition().comm().barrier();
-  if (root) std::remove(scratch.c_str());
   timers.add(Phase::Rebalance, MPI_Wtime() - t0, threadCpuSeconds() - c0);
   next->resumeRun(start, timers);
   return next;
