@@ -65,9 +65,18 @@ class Proxy final : public ParticleTransfer {
       dest_[i] = std::max(r, 0);
     }
     dec_.comm().raiseIfAny(err);
-    grow(rows_, n * kRow);
-    for (std::size_t i = 0; i < n; ++i) {
-      double* row = rows_.data() + i * kRow;
+    if (!built_) {
+      plan_ = CommPlan::fromDestinations(dec_.comm(), std::span<const int>(dest_.data(), n));
+      built_ = true;
+    } else {
+      plan_.rebuild(std::span<const int>(dest_.data(), n));
+    }
+    // Rows packed straight into the plan's send buffer, in destination order.
+    const std::span<double> rows = plan_.packBuffer(kRow);
+    const std::span<const int> order = plan_.exportIndex();
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto i = static_cast<std::size_t>(order[k]);
+      double* row = rows.data() + k * kRow;
       for (int d = 0; d < 3; ++d) {
         double xd = p.x[d][i];
         if (g.periodic[d]) {  // wrap into the box: the fluid owner's block frame
@@ -82,16 +91,9 @@ class Proxy final : public ParticleTransfer {
       row[10] = p.mass[i];
       row[11] = static_cast<double>(p.id[i]);
     }
-    if (!built_) {
-      plan_ = CommPlan::fromDestinations(dec_.comm(), std::span<const int>(dest_.data(), n));
-      built_ = true;
-    } else {
-      plan_.rebuild(std::span<const int>(dest_.data(), n));
-    }
     const std::size_t m = plan_.importCount();
     grow(in_, m * kRow);
-    const PlanTraffic tr = plan_.forward(std::span<const double>(rows_.data(), n * kRow), kRow,
-                                         std::span<double>(in_.data(), m * kRow));
+    const PlanTraffic tr = plan_.forwardPacked(kRow, std::span<double>(in_.data(), m * kRow));
     if (radius_.size() < m) {
       const std::size_t cap = m + m / 4;
       for (int d = 0; d < 3; ++d)
@@ -140,10 +142,12 @@ class Proxy final : public ParticleTransfer {
     for (std::size_t k = 0; k < m; ++k)
       for (int d = 0; d < 3; ++d) in_[3 * k + static_cast<std::size_t>(d)] = force_[d][k];
     grow(rows_, 3 * n);
-    const PlanTraffic tr = plan_.reverse(std::span<const double>(in_.data(), 3 * m), 3,
-                                         std::span<double>(rows_.data(), 3 * n));
-    for (std::size_t i = 0; i < n; ++i)
-      for (int d = 0; d < 3; ++d) p.fExt[d][i] = rows_[3 * i + static_cast<std::size_t>(d)];
+    const PlanTraffic tr = plan_.reverseInExportOrder(std::span<const double>(in_.data(), 3 * m), 3,
+                                                      std::span<double>(rows_.data(), 3 * n));
+    const std::span<const int> order = plan_.exportIndex();
+    for (std::size_t k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d)
+        p.fExt[d][static_cast<std::size_t>(order[k])] = rows_[3 * k + static_cast<std::size_t>(d)];
     book(timers, tr, MPI_Wtime() - t0);
   }
 
