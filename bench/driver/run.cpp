@@ -471,9 +471,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
             where = kRebalance;
             const auto plan = coupling::planRebalance(*simulation, cfg);
             if (plan.layouts) {
-              simulation = coupling::applyRebalance(
-                  std::move(simulation), cfg, *plan.layouts,
-                  (std::filesystem::path(outDir) / "rebalance.tmp.h5").string());
+              simulation = coupling::applyRebalance(std::move(simulation), cfg, *plan.layouts);
               output->rebind(simulation->decomposition());
               ++rebalances;
               if (root && !opts.quiet) {

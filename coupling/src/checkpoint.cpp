@@ -12,7 +12,6 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/fault.hpp"
-#include "coloc/coupling/simulation.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -433,9 +432,7 @@ dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long st
   return s;
 }
 
-// ---- Simulation: write and restore -------------------------------------------------------------
-
-namespace {
+// ---- the blocks --------------------------------------------------------------------------------
 
 void writeLayouts(H5File& f, const Layouts& L, const Decomposition& fluid,
                   const std::optional<Decomposition>& particles) {
@@ -449,102 +446,11 @@ void writeLayouts(H5File& f, const Layouts& L, const Decomposition& fluid,
   if (particles) writeCuts(f, "/partition/particles", *particles);
 }
 
-}  // namespace
-
-void Simulation::writeCheckpoint(const std::string& path, const std::string& status) {
-  // The DEM's canonical snapshot first (it rebuilds the neighbour structures); at a failure the
-  // particles as they are if the snapshot itself fails (a particle outside the box, say).
-  std::optional<dem::DemState> demState;
-  std::string demSnapshot = "canonical";
-  if (dem_) {
-    if (status == "ok") {
-      demState = dem_->saveState();
-    } else {
-      try {
-        demState = dem_->saveState();
-      } catch (const Error& e) {
-        demState = rawDemState(dem_->particles(), dem_->time(), substeps_);
-        demSnapshot = std::string("raw (no contact histories): ") + e.what();
-      }
-    }
-  }
-  ScopedPhase t(timers_, Phase::Checkpoint);
-  const Comm& comm = dec_.comm();
-  H5File f = H5File::create(comm, path, /*sync=*/true);
-  f.setChecksums(true);  // every dataset carries a Fletcher32 checksum, checked on restart
-  f.setAttribute("/", "format", kCheckpointFormat);
-  f.setAttribute("/", "version", kCheckpointVersion);
-  f.setAttribute("/", "status", status);
-  f.setAttribute("/", "case", cfg_.string("name"));
-  f.setAttribute("/", "mode", runModeName(mode_));
-  f.setAttribute("/", "ranks", comm.size());
-  f.setAttribute("/", "step", steps_);
-  f.setAttribute("/", "time", time_);
-  f.setAttribute("/", "config", cfg_.json().dump());
-  writeGrid(f, dec_.grid());
-  writeLayouts(f, layouts_, dec_, demDec_);
-  const std::string s = "/simulation";
-  f.createGroup(s);
-  f.setAttribute(s, "time", time_);
-  f.setAttribute(s, "last_dt", lastDt_);
-  f.setAttribute(s, "last_step_dt", lastStepDt_);
-  f.setAttribute(s, "steps", steps_);
-  f.setAttribute(s, "dem_substeps", substeps_);
-  f.setAttribute(s, "momentum_residual", momentumResidual_);
-  f.setAttribute(s, "solid_volume", solidVolume_);
-  f.setAttribute(s, "fluid_accel_l1", accelL1_);
-  f.setAttribute(s, "particle_drag_impulse", std::span<const double>(particleImpulse_));
-  f.setAttribute(s, "fluid_drag_impulse", std::span<const double>(fluidImpulse_));
-  if (fluid_) writeFluidState(f, "/fluid", dec_, std::as_const(*fluid_));
-  if (demState) {
-    writeDemState(f, "/particles", *demState);
-    f.setAttribute("/particles", "snapshot", demSnapshot);
-  }
-  // Fault point (tests/robustness, coloc_faults only): after the data, before the rename.
-  fault::point("checkpoint", steps_);
-  f.close();
-}
-
-Layouts Simulation::restartLayouts(const Comm& world, const Config& cfg,
-                                   const std::string& checkpoint) {
-  const GlobalGrid grid = gridFromConfig(cfg);
-  const CheckpointInfo info = checkRestartable(world, checkpoint, grid, runMode(cfg));
-  const std::string strategy = cfg.string("partition.strategy");
-  if (info.ranks != world.size() || info.strategy != strategy) return chooseLayouts(world, cfg);
-  // The blocks that wrote it: the continuation is then bitwise that of the original run.
-  Layouts L{Decomposition::fromCuts(world, grid, info.fluidCuts),
-            std::nullopt,
-            strategy,
-            CostModel{},
-            1.0,
-            1.0};
-  if (!info.particleCuts[0].empty())
-    L.particles = Decomposition::fromCuts(world, grid, info.particleCuts);
-  H5File f = H5File::openRead(world, checkpoint);
+void readLayoutCosts(H5File& f, Layouts& L) {
   L.model.perCell = f.attributeDouble("/partition", "cost_per_cell");
   L.model.perParticle = f.attributeDouble("/partition", "cost_per_particle");
   L.modelledImbalance = f.attributeDouble("/partition", "modelled_imbalance");
   L.uniformImbalance = f.attributeDouble("/partition", "uniform_modelled_imbalance");
-  f.close();
-  return L;
-}
-
-void Simulation::restoreCounters(H5File& f) {
-  const std::string s = "/simulation";
-  time_ = f.attributeDouble(s, "time");
-  lastDt_ = f.attributeDouble(s, "last_dt");
-  lastStepDt_ = f.attributeDouble(s, "last_step_dt");
-  steps_ = f.attributeInt(s, "steps");
-  substeps_ = f.attributeInt(s, "dem_substeps");
-  momentumResidual_ = f.attributeDouble(s, "momentum_residual");
-  solidVolume_ = f.attributeDouble(s, "solid_volume");
-  accelL1_ = f.attributeDouble(s, "fluid_accel_l1");
-  const auto pi = f.attributeDoubles(s, "particle_drag_impulse");
-  const auto fi = f.attributeDoubles(s, "fluid_drag_impulse");
-  for (std::size_t d = 0; d < 3 && d < pi.size() && d < fi.size(); ++d) {
-    particleImpulse_[d] = pi[d];
-    fluidImpulse_[d] = fi[d];
-  }
 }
 
 }  // namespace coloc::coupling

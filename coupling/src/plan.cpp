@@ -13,7 +13,7 @@ namespace {
 constexpr long long kDouble = sizeof(double);
 // Ghost layers: the fluid keeps 2 (fv's kGhost), the coupling's own halo plan 1.
 constexpr int kFluidGhost = 2, kCouplingGhost = 1;
-// Doubles per row (dem.cpp kGhostUpdate; Simulation::gatherParticles kRow; forces back: 3).
+// Doubles per row (dem.cpp kGhostUpdate; coupling/src/transfer.cpp Proxy::kRow; forces back: 3).
 constexpr long long kGhostUpdate = 9, kProxyRow = 12, kForceRow = 3;
 
 std::size_t k(Traffic t) {

@@ -101,7 +101,25 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
 }
 
 std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, const Config& cfg,
-                                           Layouts layouts, const std::string& scratch) {
+                                           Layouts layouts) {
+  const double t0 = MPI_Wtime(), c0 = threadCpuSeconds();
+  Timers timers = sim->timers();
+  const auto start = sim->runStart();
+  auto next = std::make_unique<Simulation>(cfg, std::move(layouts), *sim);
+  sim.reset();
+  timers.add(Phase::Rebalance, MPI_Wtime() - t0, threadCpuSeconds() - c0);
+  next->resumeRun(start, timers);
+  return next;
+}
+
+std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, const Config& cfg,
+                                           Layouts layouts, const std::string& /*scratch*/) {
+  return applyRebalance(std::move(sim), cfg, std::move(layouts));
+}
+
+std::unique_ptr<Simulation> applyRebalanceThroughFile(std::unique_ptr<Simulation> sim,
+                                                      const Config& cfg, Layouts layouts,
+                                                      const std::string& scratch) {
   const double t0 = MPI_Wtime(), c0 = threadCpuSeconds();
   Timers timers = sim->timers();
   const auto start = sim->runStart();
@@ -110,8 +128,8 @@ std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, cons
   const bool root = comm.isRoot();
   sim.reset();
   auto next = std::make_unique<Simulation>(cfg, std::move(layouts), scratch);
+  if (root) std::remove(scratch.c_str());  // every rank closed it in the constructor
   next->decomposition().comm().barrier();
-  if (root) std::remove(scratch.c_str());
   timers.add(Phase::Rebalance, MPI_Wtime() - t0, threadCpuSeconds() - c0);
   next->resumeRun(start, timers);
   return next;

@@ -11,47 +11,10 @@
 #include "coloc/core/fault.hpp"
 #include "coloc/coupling/checkpoint.hpp"
 #include "coloc/coupling/self_velocity.hpp"
+#include "coloc/partition/remap.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
-
-void declareConfig(Schema& s) {
-  s.string("coupling.kernel", "trilinear",
-           "deposition/interpolation kernel: centroid (PCM) or trilinear (cloud-in-cell)",
-           {"centroid", "trilinear"});
-  s.string("coupling.drag", "difelice", "drag law: stokes, difelice, gidaspow, beetstra",
-           {"stokes", "difelice", "gidaspow", "beetstra"});
-  s.number("coupling.eps_min", 0.3, "lower clip of the fluid fraction",
-           Range::openClosed(0.0, 1.0));
-  s.integer("coupling.smoothing_passes", 0,
-            "passes of a conservative diffusion filter (alpha 1/8) on the deposited fields and, "
-            "adjointly, on the fields sampled at the particles (0: off)",
-            Range::nonNegative());
-  s.string("coupling.self_velocity", "none",
-           "correction of the self-induced velocity (the particle's own drag reaction in the fluid "
-           "it samples): none, or stokeslet (regularised Stokeslet of Balachandar, Liu & Lakhote "
-           "2019 with this solver's response to the trilinear deposit, built up since the run's "
-           "start; trilinear kernel, no smoothing, cubic cells; docs/coupling.md)",
-           {"none", "stokeslet"});
-  s.integer("coupling.dem_substeps", 0,
-            "DEM steps per step. coupled, dummy_dem: the CFD step is dem_substeps * particles.dt "
-            "(fluid.dt and fluid.adaptive_dt are then not used); 0: the largest whole number of "
-            "particles.dt in the fluid's step (fluid.dt, or the adaptive step), at least 1. "
-            "particles mode: each step is max(1, dem_substeps) DEM steps (0 means one) and "
-            "fluid.dt is ignored",
-            Range::nonNegative());
-}
-
-Schema caseSchema() {
-  Schema s;
-  declareRunConfig(s);
-  declareDomainConfig(s);
-  fv::declareConfig(s);
-  dem::declareConfig(s);
-  declareConfig(s);
-  declareOutputConfig(s);
-  return s;
-}
 
 namespace {
 constexpr double kPi = std::numbers::pi;
@@ -89,55 +52,6 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
 
 }  // namespace
 
-StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
-                                  const StrategyInput& in, const std::vector<double>& cost,
-                                  bool costIsCount) {
-  StrategyBlocks b;
-  b.strategy = strategy;
-  std::string err;
-  std::vector<int> packed;
-  double imb[2] = {1.0, 1.0};
-  if (comm.isRoot()) {
-    try {
-      b = costIsCount ? chooseBlocks(strategy, in, {}, cost) : chooseBlocks(strategy, in, cost, {});
-      for (const Blocks* blk : {&b.fluid, b.particles ? &*b.particles : nullptr}) {
-        if (!blk) continue;
-        for (int d = 0; d < 3; ++d) packed.push_back(blk->dims[d]);
-        for (int d = 0; d < 3; ++d) packed.insert(packed.end(), blk->cuts[d].begin(), blk->cuts[d].end());
-      }
-      imb[0] = b.modelledImbalance;
-      imb[1] = b.uniformImbalance;
-    } catch (const Error& e) {
-      err = e.what();
-    }
-  }
-  err = comm.broadcast(err);
-  if (!err.empty()) throw Error(err);
-  int len = static_cast<int>(packed.size());
-  comm.broadcast(std::span<int>(&len, 1));
-  packed.resize(static_cast<std::size_t>(len));
-  comm.broadcast(std::span<int>(packed));
-  comm.broadcast(std::span<double>(imb, 2));
-  if (comm.isRoot()) return b;
-  std::size_t q = 0;
-  const auto unpack = [&](Blocks& blk) {
-    for (int d = 0; d < 3; ++d) blk.dims[d] = packed[q++];
-    for (int d = 0; d < 3; ++d) {
-      blk.cuts[d].assign(packed.begin() + static_cast<std::ptrdiff_t>(q),
-                         packed.begin() + static_cast<std::ptrdiff_t>(q) + blk.dims[d] + 1);
-      q += static_cast<std::size_t>(blk.dims[d]) + 1;
-    }
-  };
-  unpack(b.fluid);
-  if (q < packed.size()) {
-    b.particles.emplace();
-    unpack(*b.particles);
-  }
-  b.modelledImbalance = imb[0];
-  b.uniformImbalance = imb[1];
-  return b;
-}
-
 Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   const std::string strategy = cfg.string("partition.strategy");
   if (cfg.integer("partition.rebalance_interval") > 0 && strategy != "balanced")
@@ -152,21 +66,12 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
   if (!independent && cfg.integer("partition.calibrate_steps") > 0)
     model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
-  // Where the particles are: a DEM built on the uniform blocks, only to count them per cell.
+  // Where the particles start (the cost probe: the case's generator, no solver), counted per
+  // cell on rank 0 only (cellCostsOnRoot), which chooses the blocks and sends them to every
+  // rank: no rank but the root holds anything of the global cell count.
   // independent: the DEM's blocks are balanced by particle count.
-  // The cost of every cell is gathered on rank 0 only (cellCostsOnRoot), which chooses the blocks
-  // and sends them to every rank: no rank but the root holds anything of the global cell count.
-  std::vector<double> cost;
-  {
-    Timers scratch;
-    dem::DemSolver probe(uniform, cfg, scratch);
-    const auto& p = probe.particles();
-    const std::size_t n = p.nOwned;
-    cost = cellCostsOnRoot(uniform, std::span<const double>(p.x[0].data(), n),
-                           std::span<const double>(p.x[1].data(), n),
-                           std::span<const double>(p.x[2].data(), n),
-                           independent ? CostModel{0.0, 1.0} : model);
-  }
+  const std::vector<double> cost =
+      probeCellCostsOnRoot(cfg, uniform, independent ? CostModel{0.0, 1.0} : model);
   const StrategyInput in = strategyInput(cfg, world.size());
   const StrategyBlocks b = chooseBlocksOnRoot(world, strategy, in, cost, independent);
   if (independent) {
@@ -180,27 +85,17 @@ Layouts Simulation::chooseLayouts(const Comm& world, const Config& cfg) {
   return L;
 }
 
-StrategyInput strategyInput(const Config& cfg, int ranks) {
-  StrategyInput in;
-  in.grid = gridFromConfig(cfg);
-  in.ranks = ranks;
-  const auto dims = cfg.intVec3("partition.dims"), dem = cfg.intVec3("partition.dem_dims");
-  for (int d = 0; d < 3; ++d) {
-    in.dims[d] = static_cast<int>(dims[d]);
-    in.demDims[d] = static_cast<int>(dem[d]);
-  }
-  in.minCells = minBlockCells(cfg);
-  in.granularity = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
-  return in;
-}
-
 Simulation::Simulation(const Config& cfg, Layouts layouts)
-    : Simulation(cfg, std::move(layouts), nullptr) {}
+    : Simulation(cfg, std::move(layouts), nullptr, nullptr) {}
 
 Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string& checkpoint)
-    : Simulation(cfg, std::move(layouts), &checkpoint) {}
+    : Simulation(cfg, std::move(layouts), &checkpoint, nullptr) {}
 
-Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint)
+Simulation::Simulation(const Config& cfg, Layouts layouts, Simulation& from)
+    : Simulation(cfg, std::move(layouts), nullptr, &from) {}
+
+Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint,
+                       Simulation* from)
     : cfg_(cfg),
       layouts_(std::move(layouts)),
       dec_(layouts_.fluid),
@@ -222,6 +117,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   if (mode_ != RunMode::ParticlesOnly) {
     fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
     if (file) readFluidState(*file, "/fluid", dec_, *fluid_);
+    if (from) remapFluid(*from);
   }
   fault::point("setup", 0);
   if (mode_ != RunMode::FluidOnly) {
@@ -231,15 +127,21 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
                        *checkpoint);
       dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
                                               std::move(state));
+    } else if (from) {
+      // The DEM's own restoring constructor sends every row to the owner of its position.
+      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
+                                              from->dem_->saveState());
     } else {
       dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
     }
     if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
+    transfer_ = demDec_ ? proxyTransfer(dec_, *dem_) : colocatedTransfer(*dem_);
   }
   if (file) {
     restoreCounters(*file);
     file->close();
   }
+  if (from) copyCounters(*from);
   coupled_ = mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem;
   if (!coupled_) return;
 
@@ -264,7 +166,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   oneLayer.ghost = 1;
   halo_ = HaloPlan(dec_, oneLayer);
 
-  if (checkpoint) {
+  if (checkpoint || from) {
     // What the last step left in the coupling's own fields: the cell-centred velocity and the
     // pressure gradient of u^{n+1}, p^{n+1} (eps and its ghosts: restored by the fluid).
     fluid_->cellVelocity(uCell_);
@@ -291,6 +193,37 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
 }
 
 Simulation::~Simulation() = default;
+
+void Simulation::remapFluid(const Simulation& from) {
+  // fields() (non-const) marks the solver's ghosts and rates stale; restoreState sets them.
+  auto& f = fluid_->fields();
+  const auto& g = std::as_const(*from.fluid_).fields();
+  const Decomposition& old = from.dec_;
+  {
+    const Field3<double>* src[] = {&g.p, &g.eps, &g.epsOld, &g.K, &g.KUp[0], &g.KUp[1], &g.KUp[2]};
+    Field3<double>* dst[] = {&f.p, &f.eps, &f.epsOld, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
+    remapFields(old, src, dec_, dst);
+  }
+  for (int d = 0; d < 3; ++d) {
+    const Field3<double>* src[] = {&g.u[d], &std::as_const(*from.fluid_).history()[d]};
+    Field3<double>* dst[] = {&f.u[d], &fluid_->history()[d]};
+    remapFields(old, src, dec_, dst, d);
+  }
+  fluid_->restoreState(from.fluid_->counters());
+}
+
+void Simulation::copyCounters(const Simulation& from) {
+  time_ = from.time_;
+  lastDt_ = from.lastDt_;
+  lastStepDt_ = from.lastStepDt_;
+  steps_ = from.steps_;
+  substeps_ = from.substeps_;
+  momentumResidual_ = from.momentumResidual_;
+  solidVolume_ = from.solidVolume_;
+  accelL1_ = from.accelL1_;
+  particleImpulse_ = from.particleImpulse_;
+  fluidImpulse_ = from.fluidImpulse_;
+}
 
 void Simulation::beginRun() {
   timers_.beginRun();
@@ -371,133 +304,7 @@ void Simulation::resizeParticleBuffers(std::size_t n) {
 }
 
 void Simulation::gatherParticles() {
-  const auto& p = dem_->particles();
-  const std::size_t n = p.nOwned;
-  if (!demDec_) {
-    // Co-located: the kernels read the DEM's own arrays.
-    view_.n = n;
-    for (int d = 0; d < 3; ++d) {
-      view_.x[d] = p.x[d].data();
-      view_.v[d] = p.v[d].data();
-      view_.force[d] = p.f[d].data();
-      view_.held[d] = p.fExt[d].data();
-    }
-    view_.radius = p.radius.data();
-    view_.mass = p.mass.data();
-    view_.id = p.id.data();
-    return;
-  }
-  // Independent: every particle's coupling data goes to the rank whose fluid block holds it
-  // (on one rank the rows stay in memory: an exchange inside the rank).
-  ScopedPhase t(timers_, dec_.comm().size() > 1 ? Phase::ExchangeRemote : Phase::ExchangeLocal);
-  const double t0 = MPI_Wtime();
-  const Comm& comm = dec_.comm();
-  const int size = comm.size();
-  const auto& g = dec_.grid();
-  constexpr int kRow = 12;  // x3 v3 nonDrag3 radius mass id
-  auto& X = proxy_;
-  X.sendCounts.assign(static_cast<std::size_t>(size), 0);
-  if (X.dest.size() < n) X.dest.resize(n + n / 4);
-  if (X.order.size() < n) X.order.resize(n + n / 4);
-  std::string err;
-  for (std::size_t i = 0; i < n; ++i) {
-    const int r = dec_.ownerOfPoint({p.x[0][i], p.x[1][i], p.x[2][i]});
-    if (r < 0 && err.empty()) err = "particle " + std::to_string(p.id[i]) + " is outside the box";
-    X.dest[i] = std::max(r, 0);
-    ++X.sendCounts[static_cast<std::size_t>(X.dest[i])];
-  }
-  comm.raiseIfAny(err);
-  Comm::displacements(X.sendCounts, X.sendDispl);
-  std::vector<int>& fill = X.recvDispl;  // scratch: next free row per destination
-  fill = X.sendDispl;
-  for (std::size_t i = 0; i < n; ++i)
-    X.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(X.dest[i])]++)] =
-        static_cast<int>(i);
-  if (X.sendBuf.size() < n * kRow) X.sendBuf.resize(n * kRow + n * kRow / 4);
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto i = static_cast<std::size_t>(X.order[k]);
-    double* row = X.sendBuf.data() + k * kRow;
-    for (int d = 0; d < 3; ++d) {
-      double xd = p.x[d][i];
-      if (g.periodic[d]) {  // wrap into the box: the fluid owner's block frame
-        xd = g.origin[d] + std::fmod(xd - g.origin[d], g.length[d]);
-        if (xd < g.origin[d]) xd += g.length[d];
-      }
-      row[d] = xd;
-      row[3 + d] = p.v[d][i];
-      row[6 + d] = p.f[d][i] - p.fExt[d][i];
-    }
-    row[9] = p.radius[i];
-    row[10] = p.mass[i];
-    row[11] = static_cast<double>(p.id[i]);
-  }
-  comm.alltoall(X.sendCounts, X.recvCounts);
-  for (auto& c : X.sendCounts) c *= kRow;
-  for (auto& c : X.recvCounts) c *= kRow;
-  Comm::displacements(X.sendCounts, X.sendDispl);
-  const int recvTotal = Comm::displacements(X.recvCounts, X.recvDispl);
-  if (X.recvBuf.size() < static_cast<std::size_t>(recvTotal))
-    X.recvBuf.resize(static_cast<std::size_t>(recvTotal) + recvTotal / 4);
-  comm.alltoallv(std::span<const double>(X.sendBuf.data(), n * kRow), X.sendCounts, X.sendDispl,
-                 std::span<double>(X.recvBuf.data(), static_cast<std::size_t>(recvTotal)),
-                 X.recvCounts, X.recvDispl);
-  const std::size_t m = static_cast<std::size_t>(recvTotal / kRow);
-  if (X.radius.size() < m) {
-    const std::size_t cap = m + m / 4;
-    for (int d = 0; d < 3; ++d) {
-      X.x[d].resize(cap);
-      X.v[d].resize(cap);
-      X.nonDrag[d].resize(cap);
-    }
-    X.radius.resize(cap);
-    X.mass.resize(cap);
-    X.id.resize(cap);
-  }
-  for (std::size_t k = 0; k < m; ++k) {
-    const double* row = X.recvBuf.data() + k * kRow;
-    for (int d = 0; d < 3; ++d) {
-      X.x[d][k] = row[d];
-      X.v[d][k] = row[3 + d];
-      X.nonDrag[d][k] = row[6 + d];
-    }
-    X.radius[k] = row[9];
-    X.mass[k] = row[10];
-    X.id[k] = static_cast<std::int64_t>(row[11]);
-  }
-  view_.n = m;
-  for (int d = 0; d < 3; ++d) {
-    view_.x[d] = X.x[d].data();
-    view_.v[d] = X.v[d].data();
-    view_.force[d] = X.nonDrag[d].data();
-    view_.held[d] = nullptr;
-  }
-  view_.radius = X.radius.data();
-  view_.mass = X.mass.data();
-  view_.id = X.id.data();
-  bookProxyTraffic(kRow, MPI_Wtime() - t0);
-}
-
-void Simulation::bookProxyTraffic(int valuesPerParticle, double seconds) {
-  // Rows to other ranks are messages; the rows a rank keeps for itself move in memory.
-  const auto& X = proxy_;
-  const int me = dec_.comm().rank();
-  long long remote = 0, local = 0, messages = 0;
-  for (std::size_t r = 0; r < X.sendCounts.size(); ++r) {
-    const long long bytes =
-        static_cast<long long>(X.sendCounts[r]) * static_cast<long long>(sizeof(double));
-    if (static_cast<int>(r) == me) {
-      local += bytes;
-    } else if (bytes > 0) {
-      remote += bytes;
-      ++messages;
-    }
-  }
-  (void)valuesPerParticle;
-  // The time goes with the bytes: across ranks when any row left the rank.
-  timers_.book(Exchange::InterPhysicsRemote, remote, messages, messages > 0 ? seconds : 0.0,
-               Traffic::Proxy);
-  timers_.book(Exchange::InterPhysicsLocal, local, 0, messages > 0 ? 0.0 : seconds,
-               Traffic::ForceHandover);
+  view_ = transfer_->gather(timers_);
 }
 
 void Simulation::computeStencils() {
@@ -700,10 +507,8 @@ void Simulation::applyCouplingForces(double dt) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
   const std::size_t n = stencils_.count();
   // Co-located, the force goes straight into the DEM's external-force array of the same rank:
-  // the hand-over is that store (no copy). Independent, it waits in forceAt_ for the message.
-  std::array<double*, 3> out{};
-  for (int d = 0; d < 3; ++d)
-    out[d] = demDec_ ? forceAt_[d].data() : dem_->particles().fExt[d].data();
+  // the hand-over is that store (no copy). Proxies: it waits in the transfer for the message.
+  const std::array<double*, 3> out = transfer_->forceTarget();
   // sums: particle drag impulse (3), fluid drag momentum change (3), gross magnitude of the
   // exchanged terms sum beta' (|u| + |v~|) dt (3): the scale of round-off in the balance.
   double sums[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
@@ -734,39 +539,7 @@ void Simulation::applyCouplingForces(double dt) {
 }
 
 void Simulation::handForcesToParticles() {
-  auto& p = dem_->particles();
-  if (!demDec_) {
-    // Co-located: applyCouplingForces() stored the forces in the DEM's own array; what crossed
-    // from one physics to the other is those bytes, in memory, with no copy and no message.
-    const std::size_t n = stencils_.count();
-    timers_.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n * sizeof(double)), 0);
-    return;
-  }
-  // Independent: the forces travel back to the DEM ranks, in the order the rows came.
-  ScopedPhase t(timers_, dec_.comm().size() > 1 ? Phase::ExchangeRemote : Phase::ExchangeLocal);
-  const double t0 = MPI_Wtime();
-  auto& X = proxy_;
-  const Comm& comm = dec_.comm();
-  constexpr int kRow = 12;
-  const std::size_t m = view_.n;
-  // Proxy k's force goes back to where its row came from: swap the roles of the counts.
-  for (auto& c : X.recvCounts) c = c / kRow * 3;
-  for (auto& c : X.sendCounts) c = c / kRow * 3;
-  Comm::displacements(X.recvCounts, X.recvDispl);
-  Comm::displacements(X.sendCounts, X.sendDispl);
-  for (std::size_t k = 0; k < m; ++k)
-    for (int d = 0; d < 3; ++d) X.recvBuf[3 * k + static_cast<std::size_t>(d)] = forceAt_[d][k];
-  const std::size_t n = p.nOwned;
-  comm.alltoallv(std::span<const double>(X.recvBuf.data(), 3 * m), X.recvCounts, X.recvDispl,
-                 std::span<double>(X.sendBuf.data(), 3 * n), X.sendCounts, X.sendDispl);
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto i = static_cast<std::size_t>(X.order[k]);
-    for (int d = 0; d < 3; ++d) p.fExt[d][i] = X.sendBuf[3 * k + static_cast<std::size_t>(d)];
-  }
-  // Book what this rank sent back (its proxies' forces), by destination.
-  std::swap(X.sendCounts, X.recvCounts);
-  bookProxyTraffic(3, MPI_Wtime() - t0);
-  std::swap(X.sendCounts, X.recvCounts);
+  transfer_->handBack(timers_);
 }
 
 void Simulation::advanceParticles(int n) {
@@ -775,6 +548,101 @@ void Simulation::advanceParticles(int n) {
     dem_->substep();
   }
   substeps_ += n;
+}
+
+// ---- checkpoints (the file format: coupling/checkpoint.hpp) ----------------------------------
+
+void Simulation::writeCheckpoint(const std::string& path, const std::string& status) {
+  // The DEM's canonical snapshot first (it rebuilds the neighbour structures); at a failure the
+  // particles as they are if the snapshot itself fails (a particle outside the box, say).
+  std::optional<dem::DemState> demState;
+  std::string demSnapshot = "canonical";
+  if (dem_) {
+    if (status == "ok") {
+      demState = dem_->saveState();
+    } else {
+      try {
+        demState = dem_->saveState();
+      } catch (const Error& e) {
+        demState = rawDemState(dem_->particles(), dem_->time(), substeps_);
+        demSnapshot = std::string("raw (no contact histories): ") + e.what();
+      }
+    }
+  }
+  ScopedPhase t(timers_, Phase::Checkpoint);
+  const Comm& comm = dec_.comm();
+  H5File f = H5File::create(comm, path, /*sync=*/true);
+  f.setChecksums(true);  // every dataset carries a Fletcher32 checksum, checked on restart
+  f.setAttribute("/", "format", kCheckpointFormat);
+  f.setAttribute("/", "version", kCheckpointVersion);
+  f.setAttribute("/", "status", status);
+  f.setAttribute("/", "case", cfg_.string("name"));
+  f.setAttribute("/", "mode", runModeName(mode_));
+  f.setAttribute("/", "ranks", comm.size());
+  f.setAttribute("/", "step", steps_);
+  f.setAttribute("/", "time", time_);
+  f.setAttribute("/", "config", cfg_.json().dump());
+  writeGrid(f, dec_.grid());
+  writeLayouts(f, layouts_, dec_, demDec_);
+  const std::string s = "/simulation";
+  f.createGroup(s);
+  f.setAttribute(s, "time", time_);
+  f.setAttribute(s, "last_dt", lastDt_);
+  f.setAttribute(s, "last_step_dt", lastStepDt_);
+  f.setAttribute(s, "steps", steps_);
+  f.setAttribute(s, "dem_substeps", substeps_);
+  f.setAttribute(s, "momentum_residual", momentumResidual_);
+  f.setAttribute(s, "solid_volume", solidVolume_);
+  f.setAttribute(s, "fluid_accel_l1", accelL1_);
+  f.setAttribute(s, "particle_drag_impulse", std::span<const double>(particleImpulse_));
+  f.setAttribute(s, "fluid_drag_impulse", std::span<const double>(fluidImpulse_));
+  if (fluid_) writeFluidState(f, "/fluid", dec_, std::as_const(*fluid_));
+  if (demState) {
+    writeDemState(f, "/particles", *demState);
+    f.setAttribute("/particles", "snapshot", demSnapshot);
+  }
+  // Fault point (tests/robustness, coloc_faults only): after the data, before the rename.
+  fault::point("checkpoint", steps_);
+  f.close();
+}
+
+Layouts Simulation::restartLayouts(const Comm& world, const Config& cfg,
+                                   const std::string& checkpoint) {
+  const GlobalGrid grid = gridFromConfig(cfg);
+  const CheckpointInfo info = checkRestartable(world, checkpoint, grid, runMode(cfg));
+  const std::string strategy = cfg.string("partition.strategy");
+  if (info.ranks != world.size() || info.strategy != strategy) return chooseLayouts(world, cfg);
+  // The blocks that wrote it: the continuation is then bitwise that of the original run.
+  Layouts L{Decomposition::fromCuts(world, grid, info.fluidCuts),
+            std::nullopt,
+            strategy,
+            CostModel{},
+            1.0,
+            1.0};
+  if (!info.particleCuts[0].empty())
+    L.particles = Decomposition::fromCuts(world, grid, info.particleCuts);
+  H5File f = H5File::openRead(world, checkpoint);
+  readLayoutCosts(f, L);
+  f.close();
+  return L;
+}
+
+void Simulation::restoreCounters(H5File& f) {
+  const std::string s = "/simulation";
+  time_ = f.attributeDouble(s, "time");
+  lastDt_ = f.attributeDouble(s, "last_dt");
+  lastStepDt_ = f.attributeDouble(s, "last_step_dt");
+  steps_ = f.attributeInt(s, "steps");
+  substeps_ = f.attributeInt(s, "dem_substeps");
+  momentumResidual_ = f.attributeDouble(s, "momentum_residual");
+  solidVolume_ = f.attributeDouble(s, "solid_volume");
+  accelL1_ = f.attributeDouble(s, "fluid_accel_l1");
+  const auto pi = f.attributeDoubles(s, "particle_drag_impulse");
+  const auto fi = f.attributeDoubles(s, "fluid_drag_impulse");
+  for (std::size_t d = 0; d < 3 && d < pi.size() && d < fi.size(); ++d) {
+    particleImpulse_[d] = pi[d];
+    fluidImpulse_[d] = fi[d];
+  }
 }
 
 void Simulation::writeOutput(OutputWriter& out) {

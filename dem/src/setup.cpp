@@ -234,6 +234,8 @@ CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid) {
   for (auto& x : out.x) x.reserve(count);
   detail::generate(cfg, info, lo, hi, all, [&out](const detail::NewParticle& q) {
     for (int d = 0; d < 3; ++d) out.x[d].push_back(q.x[d]);
+    out.rMin = out.x[0].size() == 1 ? q.radius : std::min(out.rMin, q.radius);
+    out.rMax = std::max(out.rMax, q.radius);
   });
   return out;
 }

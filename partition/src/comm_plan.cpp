@@ -150,15 +150,15 @@ PlanTraffic CommPlan::exchange(const double* send, const std::vector<long long>&
   return t;
 }
 
-PlanTraffic CommPlan::forward(std::span<const double> src, int w, std::span<double> dst) {
-  const auto uw = static_cast<std::size_t>(w);
-  const std::size_t n = exportIndex_.size();
-  if (dst.size() < importCount() * uw) throw Error("CommPlan::forward: destination too small");
-  if (sendBuf_.size() < n * uw) sendBuf_.resize(n * uw);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double* row = src.data() + static_cast<std::size_t>(exportIndex_[k]) * uw;
-    std::copy(row, row + uw, sendBuf_.data() + k * uw);
-  }
+std::span<double> CommPlan::packBuffer(int w) {
+  const std::size_t len = exportIndex_.size() * static_cast<std::size_t>(w);
+  if (sendBuf_.size() < len) sendBuf_.resize(len);
+  return {sendBuf_.data(), len};
+}
+
+PlanTraffic CommPlan::forwardPacked(int w, std::span<double> dst) {
+  if (dst.size() < importCount() * static_cast<std::size_t>(w))
+    throw Error("CommPlan::forward: destination too small");
   for (std::size_t r = 0; r < sOff_.size(); ++r) {
     sOff_[r] = static_cast<long long>(sendOffset_[r]) * w;
     rOff_[r] = static_cast<long long>(recvOffset_[r]) * w;
@@ -166,16 +166,33 @@ PlanTraffic CommPlan::forward(std::span<const double> src, int w, std::span<doub
   return exchange(sendBuf_.data(), sOff_, sendPeers_, dst.data(), rOff_, recvPeers_);
 }
 
-PlanTraffic CommPlan::reverse(std::span<const double> src, int w, std::span<double> dst) {
+PlanTraffic CommPlan::forward(std::span<const double> src, int w, std::span<double> dst) {
   const auto uw = static_cast<std::size_t>(w);
-  const std::size_t n = exportIndex_.size();
-  if (src.size() < importCount() * uw) throw Error("CommPlan::reverse: source too small");
-  if (recvBuf_.size() < n * uw) recvBuf_.resize(n * uw);
+  const std::span<double> buf = packBuffer(w);
+  for (std::size_t k = 0; k < exportIndex_.size(); ++k) {
+    const double* row = src.data() + static_cast<std::size_t>(exportIndex_[k]) * uw;
+    std::copy(row, row + uw, buf.data() + k * uw);
+  }
+  return forwardPacked(w, dst);
+}
+
+PlanTraffic CommPlan::reverseInExportOrder(std::span<const double> src, int w,
+                                           std::span<double> dst) {
+  if (src.size() < importCount() * static_cast<std::size_t>(w) ||
+      dst.size() < exportIndex_.size() * static_cast<std::size_t>(w))
+    throw Error("CommPlan::reverse: buffers too small");
   for (std::size_t r = 0; r < sOff_.size(); ++r) {
     sOff_[r] = static_cast<long long>(recvOffset_[r]) * w;
     rOff_[r] = static_cast<long long>(sendOffset_[r]) * w;
   }
-  const PlanTraffic t = exchange(src.data(), sOff_, recvPeers_, recvBuf_.data(), rOff_, sendPeers_);
+  return exchange(src.data(), sOff_, recvPeers_, dst.data(), rOff_, sendPeers_);
+}
+
+PlanTraffic CommPlan::reverse(std::span<const double> src, int w, std::span<double> dst) {
+  const auto uw = static_cast<std::size_t>(w);
+  const std::size_t n = exportIndex_.size();
+  if (recvBuf_.size() < n * uw) recvBuf_.resize(n * uw);
+  const PlanTraffic t = reverseInExportOrder(src, w, {recvBuf_.data(), n * uw});
   for (std::size_t k = 0; k < n; ++k) {
     const double* row = recvBuf_.data() + k * uw;
     std::copy(row, row + uw, dst.data() + static_cast<std::size_t>(exportIndex_[k]) * uw);
@@ -186,13 +203,8 @@ PlanTraffic CommPlan::reverse(std::span<const double> src, int w, std::span<doub
 PlanTraffic CommPlan::reverseSum(std::span<const double> src, int w, std::span<double> dst) {
   const auto uw = static_cast<std::size_t>(w);
   const std::size_t n = exportIndex_.size();
-  if (src.size() < importCount() * uw) throw Error("CommPlan::reverseSum: source too small");
   if (recvBuf_.size() < n * uw) recvBuf_.resize(n * uw);
-  for (std::size_t r = 0; r < sOff_.size(); ++r) {
-    sOff_[r] = static_cast<long long>(recvOffset_[r]) * w;
-    rOff_[r] = static_cast<long long>(sendOffset_[r]) * w;
-  }
-  const PlanTraffic t = exchange(src.data(), sOff_, recvPeers_, recvBuf_.data(), rOff_, sendPeers_);
+  const PlanTraffic t = reverseInExportOrder(src, w, {recvBuf_.data(), n * uw});
   for (std::size_t k = 0; k < n; ++k) {
     const double* row = recvBuf_.data() + k * uw;
     double* out = dst.data() + static_cast<std::size_t>(exportIndex_[k]) * uw;

@@ -19,10 +19,12 @@
 // rank, with the file name.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/run_config.hpp"
+#include "coloc/coupling/layouts.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
 #include "coloc/io/h5io.hpp"
@@ -74,6 +76,11 @@ dem::DemState readDemState(H5File& file, const std::string& group);
 void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid& grid,
                       std::size_t materials, const std::string& path,
                       const std::string& group = "/particles");
+/// The /partition group: strategy, cost weights and imbalances of `L`, the cuts of the blocks.
+void writeLayouts(H5File& file, const Layouts& L, const Decomposition& fluid,
+                  const std::optional<Decomposition>& particles);
+/// The cost weights and imbalances of the /partition group into `L`.
+void readLayoutCosts(H5File& file, Layouts& L);
 /// The owned particles without contact histories (when DemSolver::saveState cannot run: the
 /// state at a failure).
 dem::DemState rawDemState(const dem::ParticleStore& p, double time, long long steps);

@@ -4,11 +4,11 @@
 // particles where they are now, with the cost weights measured by the run itself (busy seconds of
 // the fluid phases per cell and of the particle and coupling phases per particle, summed over
 // ranks: only their ratio places the cuts). When the modelled largest block cost drops by
-// partition.rebalance_threshold or more, the state goes to a checkpoint and the simulation is
-// built anew on the new blocks from it: cells and particles move together (a cell and the
-// particles in it land on the same rank, co-location holds by construction), contact histories
-// travel with their particles, and the continuation equals the run without re-balancing to
-// round-off (the summation order of a few sums changes with the blocks).
+// partition.rebalance_threshold or more, the simulation is built anew on the new blocks from the
+// old one's state in memory (HDF5 is for restarts only): cells and particles move together (a cell
+// and the particles in it land on the same rank, co-location holds by construction), contact
+// histories travel with their particles, and the continuation equals the run without re-balancing
+// to round-off (the summation order of a few sums changes with the blocks).
 #pragma once
 
 #include <memory>
@@ -31,10 +31,19 @@ struct RebalancePlan {
 bool rebalanceDue(const Config& cfg, long long steps);
 /// The new blocks for the particles as they are now. Collective.
 RebalancePlan planRebalance(Simulation& sim, const Config& cfg);
-/// Moves the run onto `layouts`: the state goes to the checkpoint `scratch` (removed afterwards),
-/// the simulation is built anew from it on the new blocks, and the timers carry over (the move
-/// itself booked to the rebalance phase). Collective.
+/// Moves the run onto `layouts` in memory: the new simulation is built from the old one's state
+/// (Simulation(cfg, layouts, from): fields remapped, particles sent to their new owners), then
+/// the old one is released; the timers carry over (the move itself booked to the rebalance
+/// phase). Collective.
+std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, const Config& cfg,
+                                           Layouts layouts);
+/// The same; `scratch` is not written (the name the file path used; kept for its callers).
 std::unique_ptr<Simulation> applyRebalance(std::unique_ptr<Simulation> sim, const Config& cfg,
                                            Layouts layouts, const std::string& scratch);
+/// The former path, through a restart checkpoint `scratch` (removed afterwards): for comparison
+/// (tests, the time of a re-balance before and after). The same state to round-off.
+std::unique_ptr<Simulation> applyRebalanceThroughFile(std::unique_ptr<Simulation> sim,
+                                                      const Config& cfg, Layouts layouts,
+                                                      const std::string& scratch);
 
 }  // namespace coloc::coupling

@@ -27,8 +27,9 @@
 //   independent  the baseline the paper argues against (SediFoam-like): the DEM has its own
 //                blocks (balanced by particle count, or partition.dem_dims), and every particle's
 //                coupling data travels by MPI to the rank owning its cell and the force comes back
-//                the same way (gatherParticles / handForcesToParticles): all of it is booked as
-//                inter-physics remote exchange. Same physics, same answers to round-off.
+//                the same way (gatherParticles / handForcesToParticles through the proxy
+//                ParticleTransfer, coupling/transfer.hpp): booked as inter-physics exchange.
+//                Same physics, same answers to round-off.
 //
 // Co-location makes the kernels read the fluid's arrays and the particle arrays of the same rank
 // directly: the deposition and interpolation are coupling arithmetic (SPEC section 4), and the
@@ -56,7 +57,9 @@
 #include "coloc/core/timers.hpp"
 #include "coloc/coupling/drag.hpp"
 #include "coloc/coupling/kernel.hpp"
+#include "coloc/coupling/layouts.hpp"
 #include "coloc/coupling/self_velocity.hpp"
+#include "coloc/coupling/transfer.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
 #include "coloc/io/output.hpp"
@@ -72,32 +75,12 @@ void declareConfig(Schema& s);
 /// The schema of a whole case file: run, domain, partition, fluid, particles, coupling.
 Schema caseSchema();
 
-/// The blocks of the two physics chosen by partition.strategy.
-struct Layouts {
-  Decomposition fluid;
-  std::optional<Decomposition> particles;  // set only in independent mode
-  std::string strategy = "uniform";
-  CostModel model;                 // balanced: the weights used
-  double modelledImbalance = 1.0;  // balanced: max/avg modelled block cost
-  double uniformImbalance = 1.0;   // balanced: the same for the uniform blocks
-};
-
-/// The case's constraints on the blocks of `ranks` ranks (partition.dims, partition.dem_dims,
-/// run.mode, particles.bin_cells): what chooseBlocks (partition/strategy.hpp) takes.
-StrategyInput strategyInput(const Config& cfg, int ranks);
-/// chooseBlocks on rank 0, which alone holds `cost` (cellCostsOnRoot; the particles per cell
-/// when `costIsCount`, for the independent strategy), and the result on every rank. Collective;
-/// an error of the root is raised on every rank.
-StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
-                                  const StrategyInput& in, const std::vector<double>& cost,
-                                  bool costIsCount);
-
 class Simulation {
  public:
   Simulation(const Comm& world, const Config& cfg);
   /// With explicit blocks (tests, calibration runs).
   Simulation(const Config& cfg, Layouts layouts);
-  /// Restart / re-balance: the state of `checkpoint` (coupling/checkpoint.hpp, written by
+  /// Restart: the state of `checkpoint` (coupling/checkpoint.hpp, written by
   /// writeCheckpoint) on the blocks `layouts`, which may differ from those that wrote it (any rank
   /// count, same grid). Nothing comes from the case's initial condition: the particles are those
   /// of the file (sent to their owners), the fluid fields are read block by block. `cfg` gives
@@ -105,11 +88,19 @@ class Simulation {
   /// blocks that wrote it the run continues bitwise as the original; on others to round-off.
   /// Collective; coloc::Error on every rank for a missing, corrupt, failed or foreign file.
   Simulation(const Config& cfg, Layouts layouts, const std::string& checkpoint);
+  /// Re-balancing in memory: the state of `from` on the blocks `layouts` (same ranks, same grid):
+  /// the fluid's fields and AB2 history remapped by box intersections (partition/remap.hpp),
+  /// the particles and their contact histories (DemSolver::saveState, which rebuilds `from`'s
+  /// neighbour structures) sent to their new owners, the counters copied. The same state as a
+  /// checkpoint written by `from` and read on `layouts`, without the file. Collective.
+  Simulation(const Config& cfg, Layouts layouts, Simulation& from);
   /// The blocks to restart from `checkpoint` on `world`: those that wrote it when the rank count
   /// and partition.strategy are the same, else chooseLayouts(). Checks the file first.
   static Layouts restartLayouts(const Comm& world, const Config& cfg,
                                 const std::string& checkpoint);
-  /// The blocks partition.strategy asks for (may build temporary solvers to see the particles).
+  /// The blocks partition.strategy asks for: the particles from the cost probe (layouts.hpp, no
+  /// solver); with partition.calibrate_steps a short run on the uniform blocks measures the
+  /// weights.
   static Layouts chooseLayouts(const Comm& world, const Config& cfg);
   ~Simulation();
 
@@ -168,8 +159,10 @@ class Simulation {
   Json report(double wallSeconds) const;
 
  private:
-  Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint);
+  Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint, Simulation* from);
   void restoreCounters(H5File& file);
+  void copyCounters(const Simulation& from);
+  void remapFluid(const Simulation& from);
   void waitForSlowestRank();
   void gatherParticles();
   void computeStencils();
@@ -189,34 +182,9 @@ class Simulation {
   void handForcesToParticles();
   void smoothField(CellField& f);
   const CellField& sampled(const CellField& f, CellField& smoothed);
-  void bookProxyTraffic(int valuesPerParticle, double seconds);
   void advanceParticles(int n);
   void refreshCellVelocity();
   void resizeParticleBuffers(std::size_t n);
-
-  /// What the coupling kernels see of the particles: the DEM's own arrays (co-located) or the
-  /// proxies received from the DEM ranks (independent).
-  struct ParticleView {
-    std::size_t n = 0;
-    /// The non-drag force on particle i is force[d][i] - held[d][i]: the DEM's last total force
-    /// less the coupling force it held (co-located), or the value received with the proxy
-    /// (independent: held is null).
-    std::array<const double*, 3> x{}, v{}, force{}, held{};
-    double nonDrag(int d, std::size_t i) const {
-      return force[d][i] - (held[d] ? held[d][i] : 0.0);
-    }
-    const double* radius = nullptr;
-    const double* mass = nullptr;
-    const std::int64_t* id = nullptr;
-  };
-  /// Independent mode: where each DEM particle's coupling data went, and the buffers.
-  struct ProxyExchange {
-    std::vector<int> sendCounts, sendDispl, recvCounts, recvDispl, dest, order;
-    std::vector<double> sendBuf, recvBuf;
-    std::array<std::vector<double>, 3> x, v, nonDrag;
-    std::vector<double> radius, mass;
-    std::vector<std::int64_t> id;
-  };
 
   const Config& cfg_;
   Layouts layouts_;
@@ -243,14 +211,12 @@ class Simulation {
   Stencils stencils_;
 
   // Per-particle buffers (the particles of the view; grow-only): 15 doubles and a compact
-  // stencil a particle. Co-located, applyCouplingForces() writes the coupling force into the
-  // DEM's fExt directly; independent, it replaces the sampled grad p in place (forceAt_ names
-  // the same storage) and handForcesToParticles() sends it back to the DEM ranks.
+  // stencil a particle. applyCouplingForces() writes the coupling force where the transfer says
+  // (co-located: the DEM's fExt itself) and handForcesToParticles() hands it over.
+  std::unique_ptr<ParticleTransfer> transfer_;
   ParticleView view_;
-  ProxyExchange proxy_;
   std::vector<double> volume_, beta_, epsAt_;
   std::array<std::vector<double>, 3> uAt_, vDep_, gradPAt_;
-  std::array<std::vector<double>, 3>& forceAt_ = gradPAt_;
 
   double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;

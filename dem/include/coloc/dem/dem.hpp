@@ -145,6 +145,7 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
 struct CaseParticles {
   std::array<std::vector<double>, 3> x;
   double dmax = 0, skin = 0, range = 0;  // largest diameter, skin, interaction range (m)
+  double rMin = 0, rMax = 0;             // smallest, largest radius generated (0: none)
   long long total = 0;
 };
 CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid);

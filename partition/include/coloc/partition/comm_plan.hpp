@@ -74,6 +74,13 @@ class CommPlan {
   /// Owner -> copies: src holds rows indexed by local index (w doubles each), dst receives
   /// importCount() rows. Collective over the ranks of the plan.
   PlanTraffic forward(std::span<const double> src, int w, std::span<double> dst);
+  /// Packing in place (no gather copy): the plan's send buffer, exportCount() rows of w doubles
+  /// in export order (row k is item exportIndex()[k]); fill it, then forwardPacked().
+  std::span<double> packBuffer(int w);
+  PlanTraffic forwardPacked(int w, std::span<double> dst);
+  /// Copies -> owner without the scatter: dst receives exportCount() rows in export order (row k
+  /// belongs to item exportIndex()[k]).
+  PlanTraffic reverseInExportOrder(std::span<const double> src, int w, std::span<double> dst);
   /// Copies -> owner: src holds importCount() rows; row index[k] of dst is overwritten.
   PlanTraffic reverse(std::span<const double> src, int w, std::span<double> dst);
   /// Copies -> owner, added to dst[index[k]] in export order.

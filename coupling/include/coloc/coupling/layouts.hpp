@@ -1,0 +1,57 @@
+// coloc/coupling/layouts.hpp — the blocks a run uses (Layouts), the case's constraints on them
+// and the cost probe: where the case's particles start, without a solver.
+//
+// The strategies themselves are in partition/strategy.hpp (chooseBlocks, for any rank count);
+// here they meet a live communicator (chooseBlocksOnRoot) and the case's particles
+// (probeParticles: dem::caseParticles, the run's own generator, no DemSolver). The run's
+// Simulation::chooseLayouts and `coloc check` use the same probe.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "coloc/core/config.hpp"
+#include "coloc/partition/balance.hpp"
+#include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/strategy.hpp"
+
+namespace coloc::coupling {
+
+/// The blocks of the two physics chosen by partition.strategy.
+struct Layouts {
+  Decomposition fluid;
+  std::optional<Decomposition> particles;  // set only in independent mode
+  std::string strategy = "uniform";
+  CostModel model;                 // balanced: the weights used
+  double modelledImbalance = 1.0;  // balanced: max/avg modelled block cost
+  double uniformImbalance = 1.0;   // balanced: the same for the uniform blocks
+};
+
+/// The case's constraints on the blocks of `ranks` ranks (partition.dims, partition.dem_dims,
+/// run.mode, particles.bin_cells): what chooseBlocks (partition/strategy.hpp) takes.
+StrategyInput strategyInput(const Config& cfg, int ranks);
+/// chooseBlocks on rank 0, which alone holds `cost` (cellCostsOnRoot; the particles per cell
+/// when `costIsCount`, for the independent strategy), and the result on every rank. Collective;
+/// an error of the root is raised on every rank.
+StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
+                                  const StrategyInput& in, const std::vector<double>& cost,
+                                  bool costIsCount);
+
+/// The case's initial particles as the run creates them, without a solver: the centres that lie
+/// in this rank's block of `dec` (each particle on exactly one rank), and over all of them
+/// (every rank, no communication) their count and radius range.
+struct ParticleProbe {
+  std::array<std::vector<double>, 3> x;
+  long long total = 0;
+  double rMin = 0, rMax = 0;
+};
+ParticleProbe probeParticles(const Config& cfg, const Decomposition& dec);
+
+/// The modelled cost of every global cell on rank 0 (empty elsewhere): cellCostsOnRoot of the
+/// probe's particles under `model`. Collective.
+std::vector<double> probeCellCostsOnRoot(const Config& cfg, const Decomposition& dec,
+                                         const CostModel& model);
+
+}  // namespace coloc::coupling

@@ -1,0 +1,45 @@
+// The "coupling.*" keys and the schema of a whole case file (declared in simulation.hpp).
+#include "coloc/coupling/simulation.hpp"
+#include "coloc/partition/setup.hpp"
+
+namespace coloc::coupling {
+
+void declareConfig(Schema& s) {
+  s.string("coupling.kernel", "trilinear",
+           "deposition/interpolation kernel: centroid (PCM) or trilinear (cloud-in-cell)",
+           {"centroid", "trilinear"});
+  s.string("coupling.drag", "difelice", "drag law: stokes, difelice, gidaspow, beetstra",
+           {"stokes", "difelice", "gidaspow", "beetstra"});
+  s.number("coupling.eps_min", 0.3, "lower clip of the fluid fraction",
+           Range::openClosed(0.0, 1.0));
+  s.integer("coupling.smoothing_passes", 0,
+            "passes of a conservative diffusion filter (alpha 1/8) on the deposited fields and, "
+            "adjointly, on the fields sampled at the particles (0: off)",
+            Range::nonNegative());
+  s.string("coupling.self_velocity", "none",
+           "correction of the self-induced velocity (the particle's own drag reaction in the fluid "
+           "it samples): none, or stokeslet (regularised Stokeslet of Balachandar, Liu & Lakhote "
+           "2019 with this solver's response to the trilinear deposit, built up since the run's "
+           "start; trilinear kernel, no smoothing, cubic cells; docs/coupling.md)",
+           {"none", "stokeslet"});
+  s.integer("coupling.dem_substeps", 0,
+            "DEM steps per step. coupled, dummy_dem: the CFD step is dem_substeps * particles.dt "
+            "(fluid.dt and fluid.adaptive_dt are then not used); 0: the largest whole number of "
+            "particles.dt in the fluid's step (fluid.dt, or the adaptive step), at least 1. "
+            "particles mode: each step is max(1, dem_substeps) DEM steps (0 means one) and "
+            "fluid.dt is ignored",
+            Range::nonNegative());
+}
+
+Schema caseSchema() {
+  Schema s;
+  declareRunConfig(s);
+  declareDomainConfig(s);
+  fv::declareConfig(s);
+  dem::declareConfig(s);
+  declareConfig(s);
+  declareOutputConfig(s);
+  return s;
+}
+
+}  // namespace coloc::coupling
