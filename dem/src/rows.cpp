@@ -1,6 +1,8 @@
 // dem/src/rows.cpp — generic pack/unpack of particle rows over the field table.
 #include "rows.hpp"
 
+#include <algorithm>
+
 #include "buffers.hpp"
 #include "coloc/core/error.hpp"
 
@@ -25,26 +27,34 @@ void packRow(const ParticleStore& p, unsigned op, std::size_t i, const double* s
   });
 }
 
+// The batch versions go column by column over blocks of kBlock rows: the block's rows stay in
+// L1 while every column is written into them (whole sends are larger than L2).
+constexpr std::size_t kBlock = 256;
+
 void packRows(const ParticleStore& p, unsigned op, std::span<const int> idx, const double* shift,
               double* out) {
   const std::size_t w = rowWidth(p, op), m = idx.size();
-  std::size_t o = 0;
-  forEachField(p, [&](const FieldInfo& fi, const auto* cols) {
-    if (!(fi.ops & op)) return;
-    const bool pos = shift && (fi.ops & kOpPosition);
-    for (int k = 0; k < fi.components; ++k, ++o) {
-      const auto* c = cols[k].data();
-      double* r = out + o;
-      if (pos) {
-        const double s = shift[k];
-        for (std::size_t q = 0; q < m; ++q, r += w)
-          *r = static_cast<double>(c[static_cast<std::size_t>(idx[q])]) + s;
-      } else {
-        for (std::size_t q = 0; q < m; ++q, r += w)
-          *r = static_cast<double>(c[static_cast<std::size_t>(idx[q])]);
+  for (std::size_t q0 = 0; q0 < m; q0 += kBlock) {
+    const std::size_t qn = std::min(kBlock, m - q0);
+    const int* ix = idx.data() + q0;
+    std::size_t o = 0;
+    forEachField(p, [&](const FieldInfo& fi, const auto* cols) {
+      if (!(fi.ops & op)) return;
+      const bool pos = shift && (fi.ops & kOpPosition);
+      for (int k = 0; k < fi.components; ++k, ++o) {
+        const auto* c = cols[k].data();
+        double* r = out + q0 * w + o;
+        const double s = pos ? shift[k] : 0.0;
+        if (pos) {
+          for (std::size_t q = 0; q < qn; ++q, r += w)
+            *r = static_cast<double>(c[static_cast<std::size_t>(ix[q])]) + s;
+        } else {
+          for (std::size_t q = 0; q < qn; ++q, r += w)
+            *r = static_cast<double>(c[static_cast<std::size_t>(ix[q])]);
+        }
       }
-    }
-  });
+    });
+  }
 }
 
 void unpackRow(ParticleStore& p, unsigned op, const double* in, std::size_t i, bool fresh) {
@@ -61,21 +71,22 @@ void unpackRow(ParticleStore& p, unsigned op, const double* in, std::size_t i, b
 void unpackRows(ParticleStore& p, unsigned op, const double* in, std::size_t m, std::size_t first,
                 bool fresh) {
   const std::size_t w = rowWidth(p, op);
-  std::size_t o = 0;
-  forEachField(p, [&](const FieldInfo& fi, auto* cols) {
-    using T = typename std::remove_reference_t<decltype(cols[0])>::value_type;
-    if (fi.ops & op) {
-      for (int k = 0; k < fi.components; ++k, ++o) {
-        T* c = cols[k].data() + first;
-        const double* r = in + o;
-        for (std::size_t q = 0; q < m; ++q, r += w) c[q] = static_cast<T>(*r);
+  for (std::size_t q0 = 0; q0 < m; q0 += kBlock) {
+    const std::size_t qn = std::min(kBlock, m - q0);
+    std::size_t o = 0;
+    forEachField(p, [&](const FieldInfo& fi, auto* cols) {
+      using T = typename std::remove_reference_t<decltype(cols[0])>::value_type;
+      if (fi.ops & op) {
+        for (int k = 0; k < fi.components; ++k, ++o) {
+          T* c = cols[k].data() + first + q0;
+          const double* r = in + q0 * w + o;
+          for (std::size_t q = 0; q < qn; ++q, r += w) c[q] = static_cast<T>(*r);
+        }
+      } else if (fresh) {
+        for (int k = 0; k < fi.components; ++k) std::fill_n(cols[k].data() + first + q0, qn, T{});
       }
-    } else if (fresh) {
-      for (int k = 0; k < fi.components; ++k)
-        std::fill(cols[k].begin() + static_cast<std::ptrdiff_t>(first),
-                  cols[k].begin() + static_cast<std::ptrdiff_t>(first + m), T{});
-    }
-  });
+    });
+  }
 }
 
 void resizeAll(ParticleStore& p, std::size_t n) {
