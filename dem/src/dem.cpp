@@ -123,11 +123,11 @@ std::string DemSolver::Impl::where() const {
 void DemSolver::Impl::checkOverlap(double globalMax) {
   if (globalMax <= overlapLimit) return;
   std::string msg;
-  if (maxOverlap > overlapLimit) {
-    msg = "particle " + std::to_string(maxOverlapId) + " overlaps " +
-          (maxOverlapPartner < 0 ? std::string("a wall")
-                                 : "particle " + std::to_string(maxOverlapPartner)) +
-          " by " + fmt(maxOverlap) + " of the smaller radius" + where() +
+  if (tally.maxOverlap > overlapLimit) {
+    msg = "particle " + std::to_string(tally.maxOverlapId) + " overlaps " +
+          (tally.maxOverlapPartner < 0 ? std::string("a wall")
+                                       : "particle " + std::to_string(tally.maxOverlapPartner)) +
+          " by " + fmt(tally.maxOverlap) + " of the smaller radius" + where() +
           " (limit particles.overlap_limit = " + fmt(overlapLimit) +
           "): reduce particles.dt, the velocities, or stiffen the material";
   }
@@ -153,7 +153,7 @@ bool DemSolver::Impl::decideRebuild() {
         m2 = std::numeric_limits<double>::max();
         break;
       }
-  double buf[2] = {m2, maxOverlap};
+  double buf[2] = {m2, tally.maxOverlap};
   comm.maxInPlace(std::span<double>(buf, 2));
   checkOverlap(buf[1]);
   return buf[0] > 0.25 * skin * skin;
@@ -249,16 +249,16 @@ std::size_t DemSolver::memoryBytes() const {
   return impl_->memory();
 }
 long long DemSolver::localContacts() const {
-  return impl_->contacts;
+  return impl_->tally.contacts;
 }
 long long DemSolver::localWallContacts() const {
-  return impl_->wallContacts;
+  return impl_->tally.walls;
 }
 
 Json DemSolver::diagnostics() const {
   const auto& m = *impl_;
-  double loc[6] = {static_cast<double>(m.p.nOwned),        static_cast<double>(m.contacts),
-                   static_cast<double>(m.wallContacts),    static_cast<double>(m.p.nGhost),
+  double loc[6] = {static_cast<double>(m.p.nOwned),        static_cast<double>(m.tally.contacts),
+                   static_cast<double>(m.tally.walls),     static_cast<double>(m.p.nGhost),
                    static_cast<double>(m.list.nbr.size()), static_cast<double>(m.memory())};
   m.comm.sumInPlace(std::span<double>(loc, 6));
   const double n = std::max(1.0, loc[0]);

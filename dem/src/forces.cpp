@@ -148,11 +148,7 @@ void DemSolver::Impl::forces(bool update) {
         TX[k][i] = T[k];
       }
   }
-  contacts = nc;
-  wallContacts = nw;
-  maxOverlap = worst;
-  maxOverlapId = worstId;
-  maxOverlapPartner = worstPartner;
+  tally = {nc, nw, worst, worstId, worstPartner};
 }
 
 double DemSolver::contactEnergy() const {

@@ -80,10 +80,14 @@ struct DemSolver::Impl {
   detail::GhostPlan ghosts;
   std::vector<int> perm, iscr, inScr;  // scratch (grow-only)
 
-  // diagnostics of the last force computation and of the run
-  long long rebuilds = 0, steps = 0, contacts = 0, wallContacts = 0;
-  double maxOverlap = 0;
-  std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
+  long long rebuilds = 0, steps = 0;
+  // what the last force computation saw (forces.cpp): contacts of owned particles, wall
+  // contacts, the largest overlap (fraction of the smaller radius) and its pair
+  struct ContactTally {
+    long long contacts = 0, walls = 0;
+    double maxOverlap = 0;
+    std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
+  } tally;
 
   // dem.cpp: the step
   void substep();

@@ -1,10 +1,91 @@
 // dem/src/rows.cpp — generic pack/unpack of particle rows over the field table.
 #include "rows.hpp"
 
+#include <algorithm>
+#include <array>
+#include <type_traits>
+
 #include "buffers.hpp"
 #include "coloc/core/error.hpp"
 
 namespace coloc::dem::detail {
+
+namespace {
+
+/// The columns of one operation, grouped by kind (positions, other doubles, int64, int): a row
+/// holds them in that order. Built per call on the stack from the table (no allocation), so the
+/// row loops below run over plain pointer arrays.
+template <bool Const>
+struct Plan {
+  template <class T>
+  using Ptr = std::conditional_t<Const, const T*, T*>;
+  static constexpr int kMax = 64;
+  std::array<Ptr<double>, kMax> pos{}, dbl{};
+  std::array<Ptr<std::int64_t>, kMax> i64{};
+  std::array<Ptr<int>, kMax> i32{};
+  int np = 0, nd = 0, nl = 0, ni = 0;
+  // columns outside the operation (zeroed in fresh rows)
+  std::array<Ptr<double>, kMax> zd{};
+  std::array<Ptr<std::int64_t>, kMax> zl{};
+  std::array<Ptr<int>, kMax> zi{};
+  int nzd = 0, nzl = 0, nzi = 0;
+  std::size_t width() const { return static_cast<std::size_t>(np + nd + nl + ni); }
+
+  template <class Store>
+  Plan(Store& p, unsigned op) {
+    forEachField(p, [&](const FieldInfo& fi, auto* cols) {
+      using T = typename std::remove_cvref_t<decltype(cols[0])>::value_type;
+      const bool in = (fi.ops & op) != 0;
+      for (int k = 0; k < fi.components; ++k) {
+        auto* c = cols[k].data();
+        if (np + nd + nl + ni >= kMax || nzd + nzl + nzi >= kMax)
+          throw Error("more than 64 particle field columns");
+        if constexpr (std::is_same_v<T, double>) {
+          if (!in)
+            zd[static_cast<std::size_t>(nzd++)] = c;
+          else if (fi.ops & kOpPosition)
+            pos[static_cast<std::size_t>(np++)] = c;
+          else
+            dbl[static_cast<std::size_t>(nd++)] = c;
+        } else if constexpr (std::is_same_v<T, std::int64_t>) {
+          if (in)
+            i64[static_cast<std::size_t>(nl++)] = c;
+          else
+            zl[static_cast<std::size_t>(nzl++)] = c;
+        } else {
+          if (in)
+            i32[static_cast<std::size_t>(ni++)] = c;
+          else
+            zi[static_cast<std::size_t>(nzi++)] = c;
+        }
+      }
+    });
+  }
+
+  void pack(std::size_t i, const double* shift, double* out) const requires Const {
+    if (shift)
+      for (int j = 0; j < np; ++j) *out++ = pos[static_cast<std::size_t>(j)][i] + shift[j];
+    else
+      for (int j = 0; j < np; ++j) *out++ = pos[static_cast<std::size_t>(j)][i];
+    for (int j = 0; j < nd; ++j) *out++ = dbl[static_cast<std::size_t>(j)][i];
+    for (int j = 0; j < nl; ++j) *out++ = static_cast<double>(i64[static_cast<std::size_t>(j)][i]);
+    for (int j = 0; j < ni; ++j) *out++ = static_cast<double>(i32[static_cast<std::size_t>(j)][i]);
+  }
+
+  void unpack(const double* in, std::size_t i, bool fresh) const requires(!Const) {
+    for (int j = 0; j < np; ++j) pos[static_cast<std::size_t>(j)][i] = *in++;
+    for (int j = 0; j < nd; ++j) dbl[static_cast<std::size_t>(j)][i] = *in++;
+    for (int j = 0; j < nl; ++j)
+      i64[static_cast<std::size_t>(j)][i] = static_cast<std::int64_t>(*in++);
+    for (int j = 0; j < ni; ++j) i32[static_cast<std::size_t>(j)][i] = static_cast<int>(*in++);
+    if (!fresh) return;
+    for (int j = 0; j < nzd; ++j) zd[static_cast<std::size_t>(j)][i] = 0;
+    for (int j = 0; j < nzl; ++j) zl[static_cast<std::size_t>(j)][i] = 0;
+    for (int j = 0; j < nzi; ++j) zi[static_cast<std::size_t>(j)][i] = 0;
+  }
+};
+
+}  // namespace
 
 std::size_t rowWidth(const ParticleStore& p, unsigned op) {
   std::size_t w = 0;
@@ -15,67 +96,28 @@ std::size_t rowWidth(const ParticleStore& p, unsigned op) {
 }
 
 void packRow(const ParticleStore& p, unsigned op, std::size_t i, const double* shift, double* out) {
-  forEachField(p, [&](const FieldInfo& fi, const auto* cols) {
-    if (!(fi.ops & op)) return;
-    const bool pos = shift && (fi.ops & kOpPosition);
-    for (int k = 0; k < fi.components; ++k) {
-      const double v = static_cast<double>(cols[k][i]);
-      *out++ = pos ? v + shift[k] : v;
-    }
-  });
+  Plan<true>(p, op).pack(i, shift, out);
 }
 
 void packRows(const ParticleStore& p, unsigned op, std::span<const int> idx, const double* shift,
               double* out) {
-  const std::size_t w = rowWidth(p, op), m = idx.size();
-  std::size_t o = 0;
-  forEachField(p, [&](const FieldInfo& fi, const auto* cols) {
-    if (!(fi.ops & op)) return;
-    const bool pos = shift && (fi.ops & kOpPosition);
-    for (int k = 0; k < fi.components; ++k, ++o) {
-      const auto* c = cols[k].data();
-      double* r = out + o;
-      if (pos) {
-        const double s = shift[k];
-        for (std::size_t q = 0; q < m; ++q, r += w)
-          *r = static_cast<double>(c[static_cast<std::size_t>(idx[q])]) + s;
-      } else {
-        for (std::size_t q = 0; q < m; ++q, r += w)
-          *r = static_cast<double>(c[static_cast<std::size_t>(idx[q])]);
-      }
-    }
-  });
+  const Plan<true> plan(p, op);
+  const std::size_t w = plan.width();
+  for (const int i : idx) {
+    plan.pack(static_cast<std::size_t>(i), shift, out);
+    out += w;
+  }
 }
 
 void unpackRow(ParticleStore& p, unsigned op, const double* in, std::size_t i, bool fresh) {
-  forEachField(p, [&](const FieldInfo& fi, auto* cols) {
-    using T = typename std::remove_reference_t<decltype(cols[0])>::value_type;
-    if (fi.ops & op) {
-      for (int k = 0; k < fi.components; ++k) cols[k][i] = static_cast<T>(*in++);
-    } else if (fresh) {
-      for (int k = 0; k < fi.components; ++k) cols[k][i] = T{};
-    }
-  });
+  Plan<false>(p, op).unpack(in, i, fresh);
 }
 
 void unpackRows(ParticleStore& p, unsigned op, const double* in, std::size_t m, std::size_t first,
                 bool fresh) {
-  const std::size_t w = rowWidth(p, op);
-  std::size_t o = 0;
-  forEachField(p, [&](const FieldInfo& fi, auto* cols) {
-    using T = typename std::remove_reference_t<decltype(cols[0])>::value_type;
-    if (fi.ops & op) {
-      for (int k = 0; k < fi.components; ++k, ++o) {
-        T* c = cols[k].data() + first;
-        const double* r = in + o;
-        for (std::size_t q = 0; q < m; ++q, r += w) c[q] = static_cast<T>(*r);
-      }
-    } else if (fresh) {
-      for (int k = 0; k < fi.components; ++k)
-        std::fill(cols[k].begin() + static_cast<std::ptrdiff_t>(first),
-                  cols[k].begin() + static_cast<std::ptrdiff_t>(first + m), T{});
-    }
-  });
+  const Plan<false> plan(p, op);
+  const std::size_t w = plan.width();
+  for (std::size_t q = 0; q < m; ++q, in += w) plan.unpack(in, first + q, fresh);
 }
 
 void resizeAll(ParticleStore& p, std::size_t n) {

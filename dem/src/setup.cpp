@@ -101,7 +101,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     ScopedPhase f(timers, Phase::DemForce);
     computeForces(false);
   }
-  checkOverlap(comm.max(maxOverlap));
+  checkOverlap(comm.max(tally.maxOverlap));
 }
 
 void DemSolver::Impl::readMaterials(const Config& cfg) {

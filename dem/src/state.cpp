@@ -211,7 +211,7 @@ void DemSolver::Impl::restore(DemState& st) {
         std::copy(keep.begin() + static_cast<std::ptrdiff_t>(o),
                   keep.begin() + static_cast<std::ptrdiff_t>(o + n), (*a)[k].begin());
   }
-  checkOverlap(comm.max(maxOverlap));
+  checkOverlap(comm.max(tally.maxOverlap));
 }
 
 DemState DemSolver::Impl::save() {

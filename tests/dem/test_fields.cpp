@@ -158,7 +158,9 @@ TEST(ParticleFields, GhostsMigrationAndState) {
   for (std::size_t i = 0; i < p.nOwned; ++i)
     if (!std::binary_search(before.begin(), before.end(), p.id[i])) ++arrived;
   arrived = comm.sum(arrived);
-  if (comm.size() > 1) EXPECT_GT(arrived, 0);
+  if (comm.size() > 1) {
+    EXPECT_GT(arrived, 0);
+  }
   EXPECT_EQ(comm.sum(wrongRows(p)), 0) << "migration";
   EXPECT_EQ(a.dem->globalCount(), kN);
   if (comm.isRoot())
