@@ -1,4 +1,4 @@
-// dem/src/contact.hpp — materials and the contact laws (SPEC section 2).
+// dem/src/contact.hpp — materials and the contact laws (docs/dem.md).
 //
 // Hertz–Mindlin (no slip) with tangential history and Coulomb cap, as in LIGGGHTS 3.x
 // (normal_model hertz, tangential_model history; DCS/LIGGGHTS documentation of pair gran):

@@ -15,7 +15,7 @@ std::map<std::string, Schema> boundaryTypes() {
   inlet.boolean("superficial", false,
                 "the normal velocity is superficial (volume flux per area): the face gets "
                 "U / eps of the adjacent cell, e.g. a fluidised bed resting on the inlet; "
-                "false: Dirichlet on the interstitial velocity u (SPEC section 1)");
+                "false: Dirichlet on the interstitial velocity u (docs/fv.md)");
   t["inlet"] = inlet;
   Schema outlet;
   outlet.number("pressure", 0.0, "outlet kinematic pressure p/rho_f (m^2/s^2)");

@@ -1,4 +1,4 @@
-// The fluid solver's construction, accessors, state and outputs (SPEC section 1); the step is in
+// The fluid solver's construction, accessors, state and outputs (docs/fv.md); the step is in
 // step.cpp, the choices are documented in docs/fv.md.
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The fluid step (SPEC section 1) as its verbs; the choices are documented in docs/fv.md.
+// The fluid step as its verbs; the equations and choices are documented in docs/fv.md.
 //
 //   u* = (eps^n u^n / dt + E + eps^{n+1} g + K u_p) / (eps^{n+1}/dt + K)        predictVelocity
 //   sum_f w_f (q_P - q_nb) = -div(eps^{n+1} u*) - (eps^{n+1} - eps^n)/dt       assemblePressureRhs

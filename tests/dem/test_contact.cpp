@@ -1,4 +1,4 @@
-// Binary collisions against the references of SPEC section 2 / issue 4:
+// Binary collisions against the references of docs/dem.md:
 //  - head-on sphere-sphere and sphere-wall: restitution within 1 % of e = 0.9 and 0.5 (Hertz
 //    with LIGGGHTS damping, and the linear spring-dashpot), Hertz contact duration within 3 % of
 //    t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5) in the elastic case (Johnson, Contact Mechanics, 1985);

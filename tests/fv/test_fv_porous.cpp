@@ -1,6 +1,6 @@
 // Darcy-Brinkman channel: uniform eps < 1 and uniform drag coefficient K (particles at rest,
 // K u_p = 0), no-slip walls at y = 0 and y = H, periodic z, uniform inlet velocity U and a
-// pressure outlet. Fully developed, the VANS momentum equation of SPEC section 1 reduces to
+// pressure outlet. Fully developed, the VANS momentum equation of docs/fv.md reduces to
 //   eps nu u'' - K u = eps dp/dx,
 // whose solution with u(0) = u(H) = 0 and mean U is (lambda = sqrt(K / (eps nu)), s = lambda H/2)
 //   u(y) = U [1 - cosh(lambda (y - H/2)) / cosh s] / (1 - tanh(s)/s),

@@ -1,4 +1,4 @@
-// coloc/core/report.hpp — the run report (DIR/report.json, SPEC section 6).
+// coloc/core/report.hpp — the run report (DIR/report.json, docs/benchmarks.md).
 #pragma once
 
 #include <string>

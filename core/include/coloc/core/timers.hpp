@@ -1,6 +1,6 @@
 // coloc/core/timers.hpp — one table of phase names; wall and thread-CPU (busy) time per phase,
 // reduced to min/avg/max over ranks for the report. Exchange accounting by the three kinds of
-// SPEC section 4 lives here too, so every folder books its messages in one place.
+// The exchange accounting (docs/architecture.md) lives here too, so every folder books its messages in one place.
 #pragma once
 
 #include <array>
@@ -89,13 +89,13 @@ inline constexpr std::string_view phaseName(Phase p) {
   return kPhases[static_cast<std::size_t>(p)].name;
 }
 
-/// The three kinds of exchange of SPEC section 4.
+/// The three kinds of exchange (docs/architecture.md).
 enum class Exchange : std::uint8_t { IntraPhysics, InterPhysicsLocal, InterPhysicsRemote, Count };
 inline constexpr std::array<std::string_view, 3> kExchangeNames = {
     "intra_physics", "inter_physics_local", "inter_physics_remote"};
 
 /// Finer kinds of traffic inside those three, one counter each (exchange_kinds.* in the report):
-/// what `coloc plan` predicts per kind. Auto: the default of the SPEC kind (intra-physics ->
+/// what `coloc plan` predicts per kind. Auto: the default of the exchange kind (intra-physics ->
 /// fluid_halo, inter-physics remote -> deposit_sum, inter-physics local -> force_handover).
 enum class Traffic : std::uint8_t {
   FluidHalo,      // the fluid solver's own halo gathers

@@ -5,7 +5,7 @@
 // with u_f the interstitial fluid velocity at the particle, v_p the particle velocity, eps the
 // fluid fraction at the particle, d the diameter, slip = |u_f - v_p|, rho_f the fluid density and
 // nu its kinematic viscosity (mu = rho_f nu). The pressure-gradient (buoyancy) force -V_p grad p
-// is separate ("model A" / "set II", SPEC section 1).
+// is separate ("model A" / "set II", docs/fv.md).
 //
 // Stokes      beta = 3 pi mu d                                  (creeping flow, any eps)
 // Di Felice   Di Felice (1994), Int. J. Multiphase Flow 20:153, in the form used by CFDEM:

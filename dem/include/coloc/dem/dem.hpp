@@ -1,4 +1,4 @@
-// coloc/dem/dem.hpp — the linked-cell soft-sphere DEM (SPEC section 2).
+// coloc/dem/dem.hpp — the linked-cell soft-sphere DEM (docs/dem.md).
 //
 // Contract with coupling/ (do not change without changing the coupling):
 //  - particles() holds owned particles in [0, nOwned) followed by ghosts; SoA arrays.

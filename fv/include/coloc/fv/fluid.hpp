@@ -1,4 +1,4 @@
-// coloc/fv/fluid.hpp — the volume-averaged incompressible flow solver (SPEC section 1).
+// coloc/fv/fluid.hpp — the volume-averaged incompressible flow solver (docs/fv.md).
 //
 // Staggered MAC grid on the shared decomposition: p, eps, K, K*u_p at cell centres; u on faces.
 // Fractional-step projection; semi-implicit drag (Xiao & Sun 2011); the variable-coefficient

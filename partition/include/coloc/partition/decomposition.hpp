@@ -1,5 +1,5 @@
 // coloc/partition/decomposition.hpp — the one Cartesian block decomposition that the fluid and
-// the particles share (SPEC section 4). Rank r owns the CFD cells of its block and the DEM bins
+// the particles share (docs/architecture.md). Rank r owns the CFD cells of its block and the DEM bins
 // that cover the same region, so co-location holds by construction.
 //
 // Blocks are defined by cuts along each axis: block c along axis d owns global cells
