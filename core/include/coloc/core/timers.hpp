@@ -1,6 +1,6 @@
 // coloc/core/timers.hpp — one table of phase names; wall and thread-CPU (busy) time per phase,
 // reduced to min/avg/max over ranks for the report. Exchange accounting by the three kinds of
-// The exchange accounting (docs/architecture.md) lives here too, so every folder books its messages in one place.
+// exchange (docs/architecture.md) lives here too, so every folder books its messages in one place.
 #pragma once
 
 #include <array>
