@@ -607,8 +607,8 @@ double Simulation::correctForSelfVelocity(std::size_t i, double eps, double slip
       if (err.empty()) {
         std::ostringstream os;
         os << "coupling.self_velocity: particle " << p.id[i] << " (d/h = " << d / h
-           << ") is too large for the correction (its self-induced velocity would be "
-           << cb << " of its slip, the model holds below 0.5); use larger particles' cells or "
+           << ") is too large for the correction (its self-induced velocity would be " << cb
+           << " of its slip; the model holds below 0.5): use larger cells or "
            << "coupling.self_velocity = none";
         err = os.str();
       }
