@@ -150,6 +150,9 @@ SelfResponse selfMobility(const std::array<double, 3>& t, const std::array<doubl
   }
   const double s = nu * tRun / (h * h);
   const double b = betaEff / (mu * h * eps);  // beta_eff in units of mu h eps
+  // The 6 distinct offsets (along, across1 + across2) at this time, once per call.
+  double g6[6];
+  for (int o = 0; o < 6; ++o) g6[o] = discreteGreen(o / 3, o % 3 > 0 ? 1 : 0, o % 3 > 1 ? 1 : 0, s);
   SelfResponse out{};
   for (int a = 0; a < 3; ++a) {
     const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
@@ -158,8 +161,8 @@ SelfResponse selfMobility(const std::array<double, 3>& t, const std::array<doubl
     for (int o = 0; o < 8; ++o)
       for (int q = 0; q < 8; ++q) {
         const int x = o ^ q, oa = x >> a & 1, o1 = x >> b1 & 1, o2 = x >> b2 & 1;
-        G[o][q] = discreteGreen(oa, o1, o2, s);
-        Q[o][q] = discretePressure(oa, o1, o2);
+        G[o][q] = g6[3 * oa + o1 + o2];
+        Q[o][q] = kSelfPressure[3 * oa + o1 + o2];
       }
     // The fluid takes the drag implicitly: cell o receives beta_eff w_o (U - v~ - delta_o), its
     // own disturbance delta_o lowers it. Per unit undisturbed slip, delta = b y with
