@@ -18,9 +18,11 @@ void declareConfig(Schema& s) {
             Range::nonNegative());
   s.string("coupling.self_velocity", "none",
            "correction of the self-induced velocity (the particle's own drag reaction in the fluid "
-           "it samples): none, or stokeslet (regularised Stokeslet of Balachandar, Liu & Lakhote "
-           "2019 with this solver's response to the trilinear deposit, built up since the run's "
-           "start; trilinear kernel, no smoothing, cubic cells; docs/coupling.md)",
+           "it samples): none, or stokeslet (the undisturbed flow of Balachandar, Liu & Lakhote "
+           "2019 with this solver's discrete response to the trilinear deposit and its implicit "
+           "drag, built up since the run's start; the drag law also sees the fluid fraction "
+           "without the particle's own volume and the pressure-gradient force loses the "
+           "particle's own share; trilinear kernel, no smoothing, cubic cells; docs/coupling.md)",
            {"none", "stokeslet"});
   s.integer("coupling.dem_substeps", 0,
             "DEM steps per step. coupled, dummy_dem: the CFD step is dem_substeps * particles.dt "

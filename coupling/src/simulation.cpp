@@ -300,7 +300,7 @@ void Simulation::resizeParticleBuffers(std::size_t n) {
   const std::size_t cap = std::max(n, volume_.size() + volume_.size() / 4);
   for (auto* v : {&volume_, &beta_, &epsAt_}) v->resize(cap);
   for (int d = 0; d < 3; ++d)
-    for (auto* a : {&uAt_, &vDep_, &gradPAt_}) (*a)[d].resize(cap);
+    for (auto* a : {&uAt_, &vDep_, &gradPAt_, &ownPressure_}) (*a)[d].resize(cap);
 }
 
 void Simulation::gatherParticles() {
@@ -354,6 +354,8 @@ void Simulation::evaluateDrag(double dt) {
   const ParticleView& p = view_;
   const std::size_t n = stencils_.count();
   const bool frozen = mode_ == RunMode::DummyDem;
+  const bool self = selfVelocity_ != SelfVelocity::None;
+  const double vCell = dec_.grid().cellVolume();
   std::string err;
   for (std::size_t i = 0; i < n; ++i) {
     double slip2 = 0;
@@ -361,19 +363,35 @@ void Simulation::evaluateDrag(double dt) {
       const double s = uAt_[d][i] - p.v[d][i];
       slip2 += s * s;
     }
-    const double eps = std::clamp(epsAt_[i], epsMin_, 1.0);
+    const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
+    // With the correction the drag law sees the undisturbed fluid fraction too: the sampled one
+    // less the particle's own volume, deposited and read back with the same weights (its share
+    // V / h^3 sum_c w_c^2; self_velocity.hpp).
+    double eps = epsFluid;
+    if (self) {
+      double w2 = volume_[i] / vCell;
+      for (int d = 0; d < 3; ++d) {
+        const double f = stencils_.fraction(d, i);
+        w2 *= (1.0 - f) * (1.0 - f) + f * f;
+      }
+      eps = std::clamp(epsAt_[i] + w2, epsMin_, 1.0);
+    }
     const bool still = frozen || dt <= 0;
     double beta = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
     // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
     // (self_velocity.hpp); c = 0 without the correction.
     double denom = still ? 1.0 : 1.0 + dt * beta / p.mass[i];
-    if (selfVelocity_ != SelfVelocity::None)
-      denom = correctForSelfVelocity(i, eps, std::sqrt(slip2), still ? 0.0 : dt,
-                                     time_ + std::max(dt, 0.0), beta, err);
+    std::array<double, 3> ownPressure{};
+    if (self)
+      denom = correctForSelfVelocity(i, epsFluid, eps, std::sqrt(slip2), still ? 0.0 : dt,
+                                     time_ + std::max(dt, 0.0), beta, ownPressure, err);
     if (still) {
       // Particles that cannot move: the plain coefficient and their (zero) velocity.
       beta_[i] = beta / denom;
-      for (int d = 0; d < 3; ++d) vDep_[d][i] = p.v[d][i];
+      for (int d = 0; d < 3; ++d) {
+        vDep_[d][i] = p.v[d][i];
+        ownPressure_[d][i] = 0.0;
+      }
     } else {
       // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
       // velocity the particle would reach without drag, v~ = v + dt a, with a the non-drag
@@ -384,43 +402,56 @@ void Simulation::evaluateDrag(double dt) {
       for (int d = 0; d < 3; ++d) {
         const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
         vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
+        if (self) {
+          // The pressure-gradient force of the undisturbed fluid: less the particle's own share
+          // V k F_d, F_d = beta_eff (u_at - v~) with v~ = v + dt (a - V k F_d / m) (implicit).
+          const double k = volume_[i] * ownPressure[d];
+          ownPressure_[d][i] = k;
+          const double F = beta_[i] * (uAt_[d][i] - vDep_[d][i]) / (1.0 - beta_[i] * dt * k / m);
+          vDep_[d][i] -= dt * k * F / m;
+        }
       }
     }
   }
-  if (selfVelocity_ != SelfVelocity::None) dec_.comm().raiseIfAny(err);
+  if (self) dec_.comm().raiseIfAny(err);
 }
 
-double Simulation::correctForSelfVelocity(std::size_t i, double eps, double slipSampled, double dt,
-                                          double tRun, double& beta, std::string& err) const {
+double Simulation::correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
+                                          double slipSampled, double dt, double tRun, double& beta,
+                                          std::array<double, 3>& pressure, std::string& err) const {
   // The drag law sees the undisturbed slip |u_at + c F - v| = slip / (1 - c beta'), beta' the
-  // coefficient with the particle's implicit response; a few fixed-point passes (beta depends on
-  // the slip only through Re; at Re << 1 the first pass is exact).
+  // coefficient with the particle's implicit response; c depends on the coefficient the fluid
+  // takes implicitly, beta_eff = beta / denom. A few fixed-point passes (c changes by a few
+  // per cent with beta_eff; beta depends on the slip only through Re).
   const ParticleView& p = view_;
   const double h = dec_.grid().spacing(0), mu = rhoF_ * nu_, d = 2.0 * p.radius[i];
   std::array<double, 3> dir{0.0, 0.0, 1.0}, t{};
   if (slipSampled > 0)
     for (int a = 0; a < 3; ++a) dir[a] = (uAt_[a][i] - p.v[a][i]) / slipSampled;
   for (int a = 0; a < 3; ++a) t[a] = stencils_.fraction(a, i);
-  const double c = selfMobility(t, dir, h, mu, nu_, eps, tRun);
   const double inertia = dt > 0 ? dt / p.mass[i] : 0.0;
   double denom = 1.0 + inertia * beta;
-  for (int pass = 0; pass < 3; ++pass) {
+  for (int pass = 0; pass < 4; ++pass) {
+    const SelfResponse r = selfMobility(t, dir, h, mu, nu_, epsFluid, tRun, beta / denom);
+    const double c = r.mobility;
     const double cb = c * beta / (1.0 + inertia * beta);  // c beta'
     if (!(cb < 0.5)) {
       if (err.empty()) {
         std::ostringstream os;
         os << "coupling.self_velocity: particle " << p.id[i] << " (d/h = " << d / h
-           << ") is too large for the correction (its self-induced velocity would be "
-           << cb << " of its slip, the model holds below 0.5); use larger particles' cells or "
+           << ") is too large for the correction (its self-induced velocity would be " << cb
+           << " of its slip; the model holds below 0.5): use larger cells or "
            << "coupling.self_velocity = none";
         err = os.str();
       }
       return denom;
     }
-    if (drag_ == DragLaw::Stokes) break;
-    beta = dragCoefficient(drag_, eps, d, slipSampled / (1.0 - cb), rhoF_, nu_);
+    if (drag_ != DragLaw::Stokes)
+      beta = dragCoefficient(drag_, epsUndisturbed, d, slipSampled / (1.0 - cb), rhoF_, nu_);
+    denom = 1.0 + inertia * beta - c * beta;
+    pressure = r.pressure;
   }
-  return 1.0 + inertia * beta - c * beta;
+  return denom;
 }
 
 void Simulation::depositParticles() {
@@ -516,6 +547,9 @@ void Simulation::applyCouplingForces(double dt) {
     for (int d = 0; d < 3; ++d) {
       const double drag = beta_[i] * (uAt_[d][i] - vDep_[d][i]);
       out[d][i] = drag - volume_[i] * rhoF_ * gradPAt_[d][i];
+      // With the correction, the pressure-gradient force of the undisturbed fluid: less the
+      // particle's own share (evaluateDrag; particles that cannot move have none).
+      if (selfVelocity_ != SelfVelocity::None) out[d][i] -= ownPressure_[d][i] * drag;
       sums[d] += drag * dt;
       sums[6 + d] += beta_[i] * (std::abs(uAt_[d][i]) + std::abs(vDep_[d][i])) * dt;
     }

@@ -2,9 +2,10 @@
 // self_velocity.hpp): one sphere settling at d/h = 0.4 (Di Felice drag, terminal Re 0.08) in the
 // box of test_coupled_settling (16 x 16 x 24 cells, walls 8 cells from the sphere, top outlet).
 //  - without the correction it settles > 5 % faster than its drag law (the test sees the effect);
-//  - with it, within 1 % of the drag law from 10 to 50 particle response times tau;
+//  - with it, within 1 % of the drag law at 10, 25 and 50 particle response times tau (the
+//    issue's criterion; measured -0.6 to -0.8 %, docs/coupling.md);
 //  - serial and parallel runs with the correction equal to round-off (on 2 ranks);
-//  - the steady response table against the Gaussian model and the key's checks.
+//  - the response tables, the discrete build-up and the implicit-drag solve; the key's checks.
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -92,6 +93,43 @@ TEST(SelfVelocity, ResponseTable) {
   EXPECT_NEAR(coupling::equivalentWidth(rc[0]), 0.764, 1e-3);
   EXPECT_DOUBLE_EQ(coupling::buildUp(1.0, 1.0, 0.0), 0.0);
   EXPECT_NEAR(coupling::buildUp(1.0, 1.0, 1.5), 0.5, 1e-15);  // sigma / sqrt(4 sigma^2)
+  // The discrete build-up: zero at t = 0, the table's node at nu t / h^2 = 1, increasing, and
+  // the steady table at long times (free-space 1/sqrt(s) tail past s = 16).
+  EXPECT_DOUBLE_EQ(coupling::discreteGreen(0, 0, 0, 0.0), 0.0);
+  EXPECT_NEAR(coupling::discreteGreen(0, 0, 0, 1.0), 0.0948804, 1e-12);
+  double last = 0;
+  for (double sv = 1e-3; sv < 1e3; sv *= 1.3) {
+    const double g = coupling::discreteGreen(0, 0, 0, sv);
+    EXPECT_GT(g, last) << "s = " << sv;
+    last = g;
+  }
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b)
+      for (int c = 0; c < 2; ++c)
+        EXPECT_NEAR(coupling::discreteGreen(a, b, c, 1e8), coupling::kSelfGreen[a][b][c], 1e-5);
+  // Without implicit feedback (beta_eff -> 0), long after the start, the mobility is the steady
+  // table's R / (mu h eps) and the pressure response w Q w / (h^3 eps); with the feedback the
+  // mobility is lower (the particle's own disturbance lowers the force the fluid takes).
+  const std::array<double, 3> tt{0.8, 0.7, 0.8};
+  const double rz = coupling::selfResponse(tt)[2];
+  const auto bare = coupling::selfMobility(tt, {0, 0, 1}, 2.0, 3.0, 1.0, 0.5, 1e12, 0.0);
+  EXPECT_NEAR(bare.mobility * 2.0 * 3.0 * 0.5 / rz, 1.0, 1e-6);
+  double wqw = 0;
+  for (int o = 0; o < 8; ++o)
+    for (int q = 0; q < 8; ++q) {
+      double wo = 1, wq = 1;
+      for (int d = 0; d < 3; ++d) {
+        wo *= (o >> d & 1) ? tt[d] : 1 - tt[d];
+        wq *= (q >> d & 1) ? tt[d] : 1 - tt[d];
+      }
+      const int x = o ^ q;
+      wqw += wo * wq * coupling::discretePressure(x >> 2 & 1, x & 1, x >> 1 & 1);
+    }
+  EXPECT_NEAR(bare.pressure[2] * 8.0 * 0.5 / wqw, 1.0, 1e-12);
+  const auto fed =
+      coupling::selfMobility(tt, {0, 0, 1}, 2.0, 3.0, 1.0, 0.5, 1e12, 0.25 * 3.0 * 2.0 * 0.5 / rz);
+  EXPECT_LT(fed.mobility, bare.mobility);
+  EXPECT_GT(fed.mobility, 0.95 * bare.mobility);
 }
 
 TEST(SelfVelocity, KeyChecks) {
@@ -119,8 +157,8 @@ TEST(SelfVelocity, KeyChecks) {
 }
 
 TEST(SelfVelocity, SettlingAtDOverH04) {
-  // Compared with the drag law at eps = 1 (the sphere samples eps = 0.992 of its own volume,
-  // which alone makes the Di Felice law 1.3 % slower; not a self-induced velocity).
+  // Compared with the drag law at eps = 1: an isolated sphere; with the correction the drag law
+  // sees the fluid fraction without the sphere's own volume (docs/coupling.md).
   const Comm world = Comm::world();
   const Sphere s = sphere(4e-5, 0.4, 0.08);
   const std::vector<double> at = {10, 25, 50};
@@ -130,17 +168,15 @@ TEST(SelfVelocity, SettlingAtDOverH04) {
     std::printf("d/h 0.4, Re 0.08: t = %3.0f tau  v/v_t  none %.4f  stokeslet %.4f\n", at[k],
                 off[k], on[k]);
   EXPECT_GT(off[1], 1.05) << "the uncorrected sphere no longer shows its self-induced velocity";
-  // Measured 0.957-0.960 (docs/coupling.md): the free-space model over-corrects in this box by
-  // about 4 %; the 1 % is not reached. Guard the measured state: within 5 % and at least
-  // twice closer than without the correction from 25 tau on.
-  for (std::size_t k = 0; k < at.size(); ++k) {
-    EXPECT_NEAR(on[k], 1.0, 0.05) << "t = " << at[k] << " tau";
-    if (at[k] >= 25) EXPECT_LT(std::abs(on[k] - 1.0), 0.5 * std::abs(off[k] - 1.0));
-  }
+  // The criterion: within 1 % of the drag law (measured 0.9917, 0.9940, 0.9928).
+  for (std::size_t k = 0; k < at.size(); ++k)
+    EXPECT_NEAR(on[k], 1.0, 0.01) << "t = " << at[k] << " tau";
 }
 
 TEST(SelfVelocity, SettlingAtDOverH02) {
   const Comm world = Comm::world();
+  // A figure of docs/coupling.md; the parallel path is SerialEqualsParallel's.
+  if (world.size() > 1) GTEST_SKIP() << "one rank";
   const Sphere s = sphere(4e-5, 0.2, 0.08);
   const std::vector<double> at = {10, 25, 50};
   const auto off = settle(world, s, at, "none");
@@ -148,8 +184,13 @@ TEST(SelfVelocity, SettlingAtDOverH02) {
   for (std::size_t k = 0; k < at.size(); ++k)
     std::printf("d/h 0.2, Re 0.08: t = %3.0f tau  v/v_t  none %.4f  stokeslet %.4f\n", at[k],
                 off[k], on[k]);
-  for (std::size_t k = 1; k < at.size(); ++k)
-    EXPECT_LT(std::abs(on[k] - 1.0), std::abs(off[k] - 1.0)) << "t = " << at[k] << " tau";
+  // Measured 0.9983, 0.9987, 0.9987.
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    EXPECT_NEAR(on[k], 1.0, 0.005) << "t = " << at[k] << " tau";
+    if (at[k] >= 25) {
+      EXPECT_LT(std::abs(on[k] - 1.0), std::abs(off[k] - 1.0)) << "t = " << at[k] << " tau";
+    }
+  }
 }
 
 TEST(SelfVelocity, SerialEqualsParallel) {
@@ -168,12 +209,13 @@ TEST(SelfVelocity, SerialEqualsParallel) {
 }
 
 TEST(SelfVelocity, FrozenSphereFollowsTheTable) {
-  // The table against the solver: a frozen sphere (dummy_dem, Stokes drag, no correction) in a
+  // The model against the solver: a frozen sphere (dummy_dem, Stokes drag, no correction) in a
   // periodic 32^3 box, the fluid started at U along z (cell Re 0.02). Its disturbance
-  // c beta = (U - u_at) / u_at (u_at from the drag it receives) is 4.1 % and 3.7 % below the
-  // model's c(t) beta at nu t / h^2 = 1.5 and 3 (measured): the coupling's implicit drag
-  // lowers it by 1.3 %, the model's 1/eps (0.991) raises it by 0.9 %, its Gaussian build-up is
-  // 1.2 % / 0.4 % faster than the solver's discrete one (docs/coupling.md).
+  // c beta = (U - u_at) / u_at (u_at from the drag it receives) against the model's c(t) beta
+  // (discrete build-up, implicit drag with beta_eff = beta): measured 0.8 % and 1.4 % above at
+  // nu t / h^2 = 1.5 and 3 (the model's 1/eps, docs/coupling.md).
+  if (Comm::world().size() > 1)
+    GTEST_SKIP() << "one rank (the parallel path: SerialEqualsParallel)";
   const Sphere s = sphere(4e-5, 0.4, 0.08);
   const double lx = 32 * s.h, tEnd = 3.0 * s.h * s.h / kNu;
   char buf[2048];
@@ -204,9 +246,9 @@ TEST(SelfVelocity, FrozenSphereFollowsTheTable) {
     const double uAt = p.f[2] / beta;
     const double measured = (0.1 * s.vt - uAt) / uAt;
     const double model =
-        coupling::selfMobility(t, {0, 0, 1}, s.h, mu, kNu, eps, sim.time()) * beta;
+        coupling::selfMobility(t, {0, 0, 1}, s.h, mu, kNu, eps, sim.time(), beta).mobility * beta;
     std::printf("frozen sphere, nu t/h^2 = %.1f: c beta solver %.4f, model %.4f\n", T, measured,
                 model);
-    EXPECT_NEAR(model / measured, 1.0, 0.05) << "nu t / h^2 = " << T;
+    EXPECT_NEAR(model / measured, 1.0, 0.025) << "nu t / h^2 = " << T;
   }
 }

@@ -168,11 +168,14 @@ class Simulation {
   void computeStencils();
   void sampleFluidForDrag();
   void evaluateDrag(double dt);
-  /// coupling.self_velocity: beta re-evaluated at the undisturbed slip; returns
-  /// 1 + dt beta / m - c beta (self_velocity.hpp; dt = 0 for particles that cannot move), c at
-  /// tRun after the run's start. A particle too large for the model sets err.
-  double correctForSelfVelocity(std::size_t i, double eps, double slipSampled, double dt,
-                                double tRun, double& beta, std::string& err) const;
+  /// coupling.self_velocity: beta re-evaluated at the undisturbed slip and fluid fraction
+  /// epsUndisturbed; returns 1 + dt beta / m - c beta (self_velocity.hpp; dt = 0 for particles
+  /// that cannot move), c at tRun after the run's start in fluid of fraction epsFluid; pressure:
+  /// the particle's own pressure-gradient response (SelfResponse). A particle too large for the
+  /// model sets err.
+  double correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
+                                double slipSampled, double dt, double tRun, double& beta,
+                                std::array<double, 3>& pressure, std::string& err) const;
   void depositParticles();
   void sumDepositsAcrossBlocks();
   void updateFluidCoefficients();
@@ -217,6 +220,9 @@ class Simulation {
   ParticleView view_;
   std::vector<double> volume_, beta_, epsAt_;
   std::array<std::vector<double>, 3> uAt_, vDep_, gradPAt_;
+  /// coupling.self_velocity: V k_d per particle, its own pressure-gradient force per unit drag
+  /// (SelfResponse::pressure), from evaluateDrag to applyCouplingForces of the same step.
+  std::array<std::vector<double>, 3> ownPressure_;
 
   double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
   long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
