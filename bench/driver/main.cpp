@@ -1,7 +1,7 @@
 // coloc — the command-line driver.
 //
 //   coloc run CASE.json [--set key.path=value ...] [--out DIR] [--restart CHECKPOINT.h5]
-//   coloc keys [PREFIX]   every case-file key (or those under PREFIX): type, default, range, meaning
+//   coloc keys [PREFIX]   each case-file key (or those under PREFIX): type, default, range, meaning
 //   coloc check CASE.json [--ranks N] [--set ...]   validate, show layouts/memory/time steps
 //   coloc plan CASE.json --ranks 28,56,1024 [--strategy S ...] [--set ...] [--out DIR]
 //                         layouts, work and traffic per rank for rank counts not run (one process)
