@@ -9,7 +9,7 @@
 #include <filesystem>
 
 #include "coloc/coupling/checkpoint.hpp"
-#include "coloc/partition/h5io.hpp"
+#include "coloc/io/h5io.hpp"
 #include "dem_test_util.hpp"
 
 namespace {
