@@ -13,7 +13,8 @@ namespace {
 constexpr long long kDouble = sizeof(double);
 // Ghost layers: the fluid keeps 2 (fv's kGhost), the coupling's own halo plan 1.
 constexpr int kFluidGhost = 2, kCouplingGhost = 1;
-// Doubles per row (dem.cpp kGhostUpdate; coupling/src/transfer.cpp Proxy::kRow; forces back: 3).
+// Doubles per row (the DEM's ghost update row; coupling/src/transfer.cpp Proxy::kRow; forces back:
+// 3).
 constexpr long long kGhostUpdate = 9, kProxyRow = 12, kForceRow = 3;
 
 std::size_t k(Traffic t) {
@@ -261,6 +262,7 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
       const double hi = bins.hi(g, d, bins.blockBinLo(d, D.hi(r)[d]));
       auto& R = out.rank[static_cast<std::size_t>(r)];
       const auto& Q = P[static_cast<std::size_t>(r)];
+      long long sentLo = 0;
       for (int s = 0; s < 2; ++s) {
         const int peer = s == 0 ? nLo : nHi;
         if (peer < 0) continue;
@@ -282,8 +284,11 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
         if (peer != r) {
           auto& t = R.perStep[k(Traffic::DemGhost)];
           t.bytes += out.substeps * sent * kGhostUpdate * kDouble;
-          t.messages += out.substeps;
+          // one message per neighbour with rows (the axis' plan: both faces' rows in one message
+          // when both go to one rank; nothing to a neighbour without rows)
+          if (sent > 0 && !(s == 1 && nLo == nHi && sentLo > 0)) t.messages += out.substeps;
         }
+        if (s == 0) sentLo = sent;
       }
     }
     for (int r = 0; r < ranks; ++r) {

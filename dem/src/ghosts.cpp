@@ -15,35 +15,47 @@ namespace coloc::dem {
 
 using namespace detail;
 
-void DemSolver::Impl::exchange(int d, int tagBase, bool sizesKnown) {
-  const int nLo = dec.neighbor(d, -1), nHi = dec.neighbor(d, +1);
-  const double t0 = comm.wtime();
-  if (!sizesKnown) {
-    ghosts.rbuf[0].resize(static_cast<std::size_t>(
-        comm.exchangeCount(static_cast<int>(ghosts.sbuf[0].size()), nLo, nHi, tagBase)));
-    ghosts.rbuf[1].resize(static_cast<std::size_t>(
-        comm.exchangeCount(static_cast<int>(ghosts.sbuf[1].size()), nHi, nLo, tagBase + 1)));
-  }
-  MPI_Request req[4];
-  req[0] = comm.irecv(std::span<double>(ghosts.rbuf[0]), nHi, tagBase + 2);
-  req[1] = comm.irecv(std::span<double>(ghosts.rbuf[1]), nLo, tagBase + 3);
-  req[2] = comm.isend(std::span<const double>(ghosts.sbuf[0]), nLo, tagBase + 2);
-  req[3] = comm.isend(std::span<const double>(ghosts.sbuf[1]), nHi, tagBase + 3);
-  Comm::waitAll(std::span<MPI_Request>(req, 4));
-  long long bytes = 0, msgs = 0;
-  const int me = dec.rank();
-  for (int s = 0; s < 2; ++s) {
-    const int to = s == 0 ? nLo : nHi;
-    if (to == MPI_PROC_NULL || to == me) continue;
-    bytes +=
-        static_cast<long long>(ghosts.sbuf[static_cast<std::size_t>(s)].size() * sizeof(double));
-    msgs += sizesKnown ? 1 : 2;
-  }
-  if (msgs > 0)
-    timers.book(Exchange::IntraPhysics, bytes, msgs, comm.wtime() - t0,
-                tagBase >= kTagMigCount && tagBase < kTagMigCount + 30 ? Traffic::DemMigrate
-                                                                       : Traffic::DemGhost);
+namespace {
+
+/// The ledger entry of one plan operation: its payload, plus the count messages of a build.
+void book(Timers& timers, const PlanTraffic& t, long long countMessages, double seconds,
+          Traffic kind) {
+  const long long msgs = t.messages + countMessages;
+  if (msgs > 0) timers.book(Exchange::IntraPhysics, t.remoteBytes, msgs, seconds, kind);
 }
+
+}  // namespace
+
+int DemSolver::Impl::neighbours(int d, int* out) const {
+  int n = 0;
+  for (int s = -1; s <= 1; s += 2) {
+    const int r = dec.neighbor(d, s);
+    if (r != MPI_PROC_NULL && (n == 0 || out[0] != r)) out[n++] = r;
+  }
+  return n;
+}
+
+int DemSolver::Impl::importSegments(const CommPlan& plan, int d,
+                                    std::array<GhostPlan::Segment, 2>& seg, int at) const {
+  const int nLo = dec.neighbor(d, -1), nHi = dec.neighbor(d, +1);
+  int n = 0;
+  for (const int r : {nHi, nLo}) {
+    if (r == MPI_PROC_NULL || (n == 1 && r == nHi)) continue;  // both faces to one rank: once
+    seg[static_cast<std::size_t>(n++)] = {plan.importOffset(r), plan.importsFrom(r), at};
+    at += plan.importsFrom(r);
+  }
+  return n;
+}
+
+namespace {
+
+/// First export row of face s (0 low, 1 high) in a plan grouped by rank: the block of its
+/// neighbour, the low face first when both faces go to one rank.
+int faceOffset(const CommPlan& plan, const int* to, int s, int lowRows) {
+  return plan.exportOffset(to[s]) + (s == 1 && to[0] == to[1] ? lowRows : 0);
+}
+
+}  // namespace
 
 void DemSolver::Impl::migrate() {
   std::string err;
@@ -113,16 +125,39 @@ void DemSolver::Impl::migrate() {
     }
     p.nOwned = w;
     hist.truncate(w, hw);
-    if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) continue;
-    exchange(d, kTagMigCount + 10 * d, false);
-    for (int s = 0; s < 2; ++s) {
-      const auto& b = ghosts.rbuf[static_cast<std::size_t>(s)];
+    int nb[2];
+    const int nn = neighbours(d, nb);
+    if (nn == 0) continue;
+    // the two faces' rows through one plan whose items are the doubles of the rows (their
+    // lengths vary with the histories); the counts go to the neighbours only
+    const double t0 = comm.wtime();
+    const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+    auto& sb = ghosts.sbuf;
+    ghosts.counts.assign(static_cast<std::size_t>(comm.size()), 0);
+    for (int s = 0; s < 2; ++s)
+      if (to[s] != MPI_PROC_NULL)  // a face without a neighbour has no rows (dir = 0 above)
+        ghosts.counts[static_cast<std::size_t>(to[s])] +=
+            static_cast<int>(sb[static_cast<std::size_t>(s)].size());
+    ghosts.mig.rebuildFromCounts(comm, ghosts.counts, std::span<const int>(nb, nn));
+    const std::span<double> out = ghosts.mig.packBuffer(1);
+    for (int s = 0; s < 2; ++s)
+      if (to[s] != MPI_PROC_NULL)
+        std::copy(sb[static_cast<std::size_t>(s)].begin(), sb[static_cast<std::size_t>(s)].end(),
+                  out.data() + faceOffset(ghosts.mig, to, s, static_cast<int>(sb[0].size())));
+    ghosts.rbuf.resize(ghosts.mig.importCount());
+    const PlanTraffic t = ghosts.mig.forwardPacked(1, ghosts.rbuf);
+    book(timers, t, nn - (nb[0] == dec.rank() ? 1 : 0), comm.wtime() - t0, Traffic::DemMigrate);
+    std::array<GhostPlan::Segment, 2> seg;
+    const int ns = importSegments(ghosts.mig, d, seg, 0);
+    for (int g = 0; g < ns; ++g) {
+      const double* b = ghosts.rbuf.data() + seg[static_cast<std::size_t>(g)].from;
+      const auto len = static_cast<std::size_t>(seg[static_cast<std::size_t>(g)].count);
       std::size_t q = 0;
-      while (q < b.size()) {
+      while (q < len) {
         const std::size_t i = p.nOwned;
         detail::resizeAll(p, i + 1);
         p.nOwned = i + 1;
-        detail::unpackRow(p, kOpMigrate, b.data() + q, i, true);
+        detail::unpackRow(p, kOpMigrate, b + q, i, true);
         const int nh = static_cast<int>(b[q + W]);
         q += W + 1;
         ensure(hist.hId, hist.hId.size() + static_cast<std::size_t>(nh));
@@ -130,7 +165,7 @@ void DemSolver::Impl::migrate() {
         ensure(hist.hStart, hist.hStart.size() + 1);
         for (int e = 0; e < nh; ++e, q += 4) {
           hist.hId.push_back(static_cast<std::int64_t>(b[q]));
-          hist.hS.insert(hist.hS.end(), b.data() + q + 1, b.data() + q + 4);
+          hist.hS.insert(hist.hS.end(), b + q + 1, b + q + 4);
         }
         hist.hStart.push_back(static_cast<int>(hist.hId.size()));
       }
@@ -144,41 +179,58 @@ void DemSolver::Impl::buildGhosts() {
   const std::size_t W = detail::rowWidth(p, kOpGhostBuild);
   for (int d = 0; d < 3; ++d) {
     const std::size_t nBefore = p.size();
+    auto& sw = ghosts.swaps[d];
+    const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+    ghosts.rank.clear();
+    ghosts.index.clear();
     for (int s = 0; s < 2; ++s) {
-      auto& sw = ghosts.swaps[d][static_cast<std::size_t>(s)];
-      auto& b = ghosts.sbuf[static_cast<std::size_t>(s)];
-      sw.send.clear();
-      b.clear();
-      sw.shift = 0;
-      if (dec.neighbor(d, s == 0 ? -1 : 1) == MPI_PROC_NULL) continue;
+      auto& f = sw[static_cast<std::size_t>(s)];
+      f.send.clear();
+      f.shift = 0;
+      if (to[s] == MPI_PROC_NULL) continue;
       if (bins.periodic[d]) {
-        if (s == 0 && coords[d] == 0) sw.shift = bins.L[d];
-        if (s == 1 && coords[d] == dims[d] - 1) sw.shift = -bins.L[d];
+        if (s == 0 && coords[d] == 0) f.shift = bins.L[d];
+        if (s == 1 && coords[d] == dims[d] - 1) f.shift = -bins.L[d];
       }
       const double* x = p.x[d].data();
       const double lim = s == 0 ? bins.lo[d] + rc : bins.hi[d] - rc;
       for (std::size_t i = 0; i < nBefore; ++i)
-        if (s == 0 ? x[i] < lim : x[i] >= lim) sw.send.push_back(static_cast<int>(i));
-      double shift[3] = {0, 0, 0};
-      shift[d] = sw.shift;
-      b.resize(sw.send.size() * W);
-      detail::packRows(p, kOpGhostBuild, sw.send, shift, b.data());
+        if (s == 0 ? x[i] < lim : x[i] >= lim) f.send.push_back(static_cast<int>(i));
+      ghosts.rank.insert(ghosts.rank.end(), f.send.size(), to[s]);
+      ghosts.index.insert(ghosts.index.end(), f.send.begin(), f.send.end());
     }
-    if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) {
-      for (int s = 0; s < 2; ++s) ghosts.swaps[d][static_cast<std::size_t>(s)].recvCount = 0;
-      continue;
-    }
-    exchange(d, kTagGhostCount + 10 * d, false);
+    int nb[2];
+    const int nn = neighbours(d, nb);
+    ghosts.nSeg[static_cast<std::size_t>(d)] = 0;
+    if (nn == 0) continue;
+    // one plan per axis from the rows' destinations (counts to the two neighbours only), kept
+    // for the updates
+    const double t0 = comm.wtime();
+    auto& plan = ghosts.plan[static_cast<std::size_t>(d)];
+    plan.rebuild(comm, ghosts.rank, ghosts.index, std::span<const int>(nb, nn));
+    const std::span<double> out = plan.packBuffer(static_cast<int>(W));
     for (int s = 0; s < 2; ++s) {
-      const auto& b = ghosts.rbuf[static_cast<std::size_t>(s)];
-      const std::size_t cnt = W > 0 ? b.size() / W : 0;
-      const std::size_t start = p.size();
-      auto& sw = ghosts.swaps[d][static_cast<std::size_t>(s)];
-      sw.recvStart = static_cast<int>(start);
-      sw.recvCount = static_cast<int>(cnt);
-      detail::resizeAll(p, start + cnt);
-      p.nGhost += cnt;
-      detail::unpackRows(p, kOpGhostBuild, b.data(), cnt, start, true);
+      if (to[s] == MPI_PROC_NULL) continue;
+      double shift[3] = {0, 0, 0};
+      shift[d] = sw[static_cast<std::size_t>(s)].shift;
+      const int at = faceOffset(plan, to, s, static_cast<int>(sw[0].send.size()));
+      detail::packRows(p, kOpGhostBuild, sw[static_cast<std::size_t>(s)].send, shift,
+                       out.data() + static_cast<std::size_t>(at) * W);
+    }
+    ghosts.rbuf.resize(plan.importCount() * W);
+    const PlanTraffic t = plan.forwardPacked(static_cast<int>(W), ghosts.rbuf);
+    book(timers, t, nn - (nb[0] == dec.rank() ? 1 : 0), comm.wtime() - t0, Traffic::DemGhost);
+    auto& seg = ghosts.seg[static_cast<std::size_t>(d)];
+    const std::size_t start = p.size(), cnt = plan.importCount();
+    const int ns = importSegments(plan, d, seg, static_cast<int>(start));
+    ghosts.nSeg[static_cast<std::size_t>(d)] = ns;
+    detail::resizeAll(p, start + cnt);
+    p.nGhost += cnt;
+    for (int g = 0; g < ns; ++g) {
+      const auto& sg = seg[static_cast<std::size_t>(g)];
+      detail::unpackRows(p, kOpGhostBuild,
+                         ghosts.rbuf.data() + static_cast<std::size_t>(sg.from) * W,
+                         static_cast<std::size_t>(sg.count), static_cast<std::size_t>(sg.at), true);
     }
   }
 }
@@ -186,22 +238,28 @@ void DemSolver::Impl::buildGhosts() {
 void DemSolver::Impl::updateGhosts() {
   const std::size_t W = detail::rowWidth(p, kOpGhostUpdate);
   for (int d = 0; d < 3; ++d) {
-    if (dec.neighbor(d, -1) == MPI_PROC_NULL && dec.neighbor(d, +1) == MPI_PROC_NULL) continue;
+    if (ghosts.nSeg[static_cast<std::size_t>(d)] == 0) continue;
+    const auto& sw = ghosts.swaps[d];
+    const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+    const double t0 = comm.wtime();
+    auto& plan = ghosts.plan[static_cast<std::size_t>(d)];
+    const std::span<double> out = plan.packBuffer(static_cast<int>(W));
     for (int s = 0; s < 2; ++s) {
-      const auto& sw = ghosts.swaps[d][static_cast<std::size_t>(s)];
-      auto& b = ghosts.sbuf[static_cast<std::size_t>(s)];
+      if (to[s] == MPI_PROC_NULL) continue;
       double shift[3] = {0, 0, 0};
-      shift[d] = sw.shift;
-      b.resize(sw.send.size() * W);
-      detail::packRows(p, kOpGhostUpdate, sw.send, shift, b.data());
-      ghosts.rbuf[static_cast<std::size_t>(s)].resize(static_cast<std::size_t>(sw.recvCount) * W);
+      shift[d] = sw[static_cast<std::size_t>(s)].shift;
+      const int at = faceOffset(plan, to, s, static_cast<int>(sw[0].send.size()));
+      detail::packRows(p, kOpGhostUpdate, sw[static_cast<std::size_t>(s)].send, shift,
+                       out.data() + static_cast<std::size_t>(at) * W);
     }
-    exchange(d, kTagUpdate + 10 * d, true);
-    for (int s = 0; s < 2; ++s) {
-      const auto& sw = ghosts.swaps[d][static_cast<std::size_t>(s)];
-      detail::unpackRows(p, kOpGhostUpdate, ghosts.rbuf[static_cast<std::size_t>(s)].data(),
-                         static_cast<std::size_t>(sw.recvCount),
-                         static_cast<std::size_t>(sw.recvStart), false);
+    ghosts.rbuf.resize(plan.importCount() * W);
+    const PlanTraffic t = plan.forwardPacked(static_cast<int>(W), ghosts.rbuf);
+    book(timers, t, 0, comm.wtime() - t0, Traffic::DemGhost);
+    for (int g = 0; g < ghosts.nSeg[static_cast<std::size_t>(d)]; ++g) {
+      const auto& sg = ghosts.seg[static_cast<std::size_t>(d)][static_cast<std::size_t>(g)];
+      detail::unpackRows(
+          p, kOpGhostUpdate, ghosts.rbuf.data() + static_cast<std::size_t>(sg.from) * W,
+          static_cast<std::size_t>(sg.count), static_cast<std::size_t>(sg.at), false);
     }
   }
 }

@@ -34,10 +34,6 @@ using detail::Material;
 using detail::Model;
 using detail::PairCoeff;
 
-namespace detail {
-constexpr int kTagGhostCount = 4100, kTagUpdate = 4300, kTagMigCount = 4400;
-}  // namespace detail
-
 struct DemSolver::Impl {
   Impl(const Decomposition& d, const Config& cfg, Timers& t, DemState* initial = nullptr);
 
@@ -117,7 +113,13 @@ struct DemSolver::Impl {
   /// packed contact histories [h0, h1) moved down to hw on.
   void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
   // ghosts.cpp
-  void exchange(int d, int tagBase, bool sizesKnown);
+  /// The neighbours along axis d (MPI_PROC_NULL left out; this rank when the axis is periodic
+  /// over one block); returns how many (0 to 2).
+  int neighbours(int d, int* out) const;
+  /// Where the imports of `plan` from the two neighbours along d go: the segments of rows
+  /// from the high neighbour, then the low one (the order of the face exchanges).
+  int importSegments(const CommPlan& plan, int d, std::array<detail::GhostPlan::Segment, 2>& seg,
+                     int at) const;
   void migrate();
   void buildGhosts();
   void updateGhosts();

@@ -27,21 +27,21 @@ int DemSolver::Impl::ownerRank(const double* x) const {
 }
 
 namespace {
-/// Sends blocks[r] to rank r (all-to-all); returns what arrived, rank after rank.
-std::vector<double> sendBlocks(const Comm& comm, const std::vector<std::vector<double>>& blocks) {
-  const int P = comm.size();
-  std::vector<int> sc(static_cast<std::size_t>(P)), rc, sd, rd;
-  std::vector<double> send;
-  for (int r = 0; r < P; ++r) {
-    const auto& b = blocks[static_cast<std::size_t>(r)];
-    sc[static_cast<std::size_t>(r)] = static_cast<int>(b.size());
-    send.insert(send.end(), b.begin(), b.end());
-  }
-  comm.alltoall(sc, rc);
-  Comm::displacements(sc, sd);
-  std::vector<double> recv(static_cast<std::size_t>(Comm::displacements(rc, rd)));
-  comm.alltoallv(std::span<const double>(send), sc, sd, std::span<double>(recv), rc, rd);
-  return recv;
+/// Row i (w doubles, written by pack(i, out)) to rank dest[i], through a plan built from the
+/// destinations (partition/comm_plan.hpp; payload only to the ranks with rows); returns what
+/// arrived, rank after rank, each rank's rows in its order. `plan` tells how many came from
+/// each rank.
+template <class Pack>
+std::vector<double> toRanks(CommPlan& plan, const Comm& comm, std::span<const int> dest, int w,
+                            Pack&& pack) {
+  plan = CommPlan::fromDestinations(comm, dest);
+  const std::span<double> buf = plan.packBuffer(w);
+  const auto idx = plan.exportIndex();
+  for (std::size_t k = 0; k < idx.size(); ++k)
+    pack(static_cast<std::size_t>(idx[k]), buf.data() + k * static_cast<std::size_t>(w));
+  std::vector<double> in(plan.importCount() * static_cast<std::size_t>(w));
+  plan.forwardPacked(w, in);
+  return in;
 }
 constexpr int kHistRec = 5;  // holder, partner, shear3
 }  // namespace
@@ -101,15 +101,15 @@ void DemSolver::Impl::restore(DemState& st) {
     err =
         "the restored state's extra particle fields differ between the ranks or from the solver's";
   comm.raiseIfAny(err);
-  std::vector<std::vector<double>> out(static_cast<std::size_t>(P));
+  std::vector<int> dest(q.nOwned);
   for (std::size_t i = 0; i < q.nOwned; ++i) {
     const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
-    auto& b = out[static_cast<std::size_t>(ownerRank(xi))];
-    const std::size_t o = b.size();
-    b.resize(o + W);
-    detail::packRow(q, kOpState, i, nullptr, b.data() + o);
+    dest[i] = ownerRank(xi);
   }
-  std::vector<double> in = sendBlocks(comm, out);
+  CommPlan plan;
+  std::vector<double> in =
+      toRanks(plan, comm, dest, static_cast<int>(W),
+              [&](std::size_t i, double* o) { detail::packRow(q, kOpState, i, nullptr, o); });
   const std::size_t n = W > 0 ? in.size() / W : 0;
   detail::resizeAll(p, n);
   p.nOwned = n;
@@ -122,37 +122,39 @@ void DemSolver::Impl::restore(DemState& st) {
   comm.raiseIfAny(err);
   // 2. histories to their holders through a directory (rank holder % P): the directory learns
   //    every holder's owner, then forwards; a history may sit on any rank, apart from its holder
-  for (auto& b : out) b.clear();
-  for (const auto& c : st.contacts) {
+  dest.resize(st.contacts.size());
+  for (std::size_t h = 0; h < st.contacts.size(); ++h) {
+    const auto& c = st.contacts[h];
     if (c.holder < 0) {
       if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
+      dest[h] = 0;
       continue;
     }
-    auto& b = out[static_cast<std::size_t>(c.holder % P)];
-    b.push_back(static_cast<double>(c.holder));
-    b.push_back(static_cast<double>(c.partner));
-    b.insert(b.end(), c.shear.begin(), c.shear.end());
+    dest[h] = static_cast<int>(c.holder % P);
   }
   comm.raiseIfAny(err);
+  const auto histRow = [](const ContactHistory& c, double* o) {
+    o[0] = static_cast<double>(c.holder);
+    o[1] = static_cast<double>(c.partner);
+    std::copy(c.shear.begin(), c.shear.end(), o + 2);
+  };
+  const std::vector<double> held = toRanks(
+      plan, comm, dest, kHistRec, [&](std::size_t h, double* o) { histRow(st.contacts[h], o); });
   st = DemState{};  // the input is no longer needed
-  const std::vector<double> held = sendBlocks(comm, out);
-  for (auto& b : out) b.clear();
-  for (std::size_t i = 0; i < n; ++i)
-    out[static_cast<std::size_t>(p.id[i] % P)].push_back(static_cast<double>(p.id[i]));
-  std::vector<double> reg = sendBlocks(comm, out);  // ids owned by each rank, rank after rank
+  dest.resize(n);
+  for (std::size_t i = 0; i < n; ++i) dest[i] = static_cast<int>(p.id[i] % P);
+  // ids owned by each rank, rank after rank
+  const std::vector<double> reg = toRanks(
+      plan, comm, dest, 1, [&](std::size_t i, double* o) { o[0] = static_cast<double>(p.id[i]); });
+  std::vector<int> histAt;  // rows of `held` kept, in order
   {
-    std::vector<int> rc(static_cast<std::size_t>(P)), rd;
-    std::vector<int> sc(static_cast<std::size_t>(P));
-    for (int r = 0; r < P; ++r)
-      sc[static_cast<std::size_t>(r)] = static_cast<int>(out[static_cast<std::size_t>(r)].size());
-    comm.alltoall(sc, rc);
     std::vector<std::pair<std::int64_t, int>> owner;  // (id, owner rank)
     std::size_t k = 0;
     for (int r = 0; r < P; ++r)
-      for (int c = 0; c < rc[static_cast<std::size_t>(r)]; ++c, ++k)
+      for (int c = 0; c < plan.importsFrom(r); ++c, ++k)
         owner.emplace_back(static_cast<std::int64_t>(reg[k]), r);
     std::sort(owner.begin(), owner.end());
-    for (auto& b : out) b.clear();
+    dest.clear();
     for (std::size_t h = 0; h + kHistRec <= held.size(); h += kHistRec) {
       const auto id = static_cast<std::int64_t>(held[h]);
       const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
@@ -162,13 +164,14 @@ void DemSolver::Impl::restore(DemState& st) {
                 ", which is not among the restored particles";
         continue;
       }
-      auto& b = out[static_cast<std::size_t>(it->second)];
-      b.insert(b.end(), held.begin() + static_cast<std::ptrdiff_t>(h),
-               held.begin() + static_cast<std::ptrdiff_t>(h + kHistRec));
+      dest.push_back(it->second);
+      histAt.push_back(static_cast<int>(h));
     }
   }
   comm.raiseIfAny(err);
-  const std::vector<double> mine = sendBlocks(comm, out);
+  const std::vector<double> mine =
+      toRanks(plan, comm, dest, kHistRec,
+              [&](std::size_t k, double* o) { std::copy_n(held.data() + histAt[k], kHistRec, o); });
   // 3. history rows per local particle (the format migration and the list build use)
   std::vector<std::pair<std::int64_t, int>> byId(n);
   for (std::size_t i = 0; i < n; ++i) byId[i] = {p.id[i], static_cast<int>(i)};

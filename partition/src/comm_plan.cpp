@@ -56,33 +56,61 @@ CommPlan::CommPlan(const Comm& comm, std::span<const int> rank, std::span<const 
 
 CommPlan CommPlan::withNeighbours(const Comm& comm, std::span<const int> rank,
                                   std::span<const int> index, std::span<const int> neighbours) {
-  CommPlan p(comm, rank, index, 0);
-  const int size = comm.size();
-  p.recvCount_.assign(static_cast<std::size_t>(size), 0);
-  std::vector<int> peers(neighbours.begin(), neighbours.end());
-  std::sort(peers.begin(), peers.end());
-  peers.erase(std::unique(peers.begin(), peers.end()), peers.end());
+  CommPlan p;
+  p.rebuild(comm, rank, index, neighbours);
+  return p;
+}
+
+void CommPlan::rebuild(const Comm& comm, std::span<const int> rank, std::span<const int> index,
+                       std::span<const int> neighbours) {
+  comm_ = comm;
+  me_ = comm.rank();
+  group(rank, index);
+  neighbourCounts(neighbours);
+  finish();
+}
+
+void CommPlan::rebuildFromCounts(const Comm& comm, std::span<const int> sendCounts,
+                                 std::span<const int> neighbours) {
+  comm_ = comm;
+  me_ = comm.rank();
+  const auto size = static_cast<std::size_t>(comm.size());
+  if (sendCounts.size() != size) throw Error("CommPlan::rebuildFromCounts: one count per rank");
+  sendCount_.assign(sendCounts.begin(), sendCounts.end());
+  long long n = 0;
+  for (int c : sendCount_) n += c;
+  exportIndex_.resize(static_cast<std::size_t>(n));
+  for (std::size_t k = 0; k < exportIndex_.size(); ++k) exportIndex_[k] = static_cast<int>(k);
+  neighbourCounts(neighbours);
+  finish();
+}
+
+void CommPlan::neighbourCounts(std::span<const int> neighbours) {
+  const int size = comm_.size();
+  recvCount_.assign(static_cast<std::size_t>(size), 0);
+  peers_.assign(neighbours.begin(), neighbours.end());
+  std::sort(peers_.begin(), peers_.end());
+  peers_.erase(std::unique(peers_.begin(), peers_.end()), peers_.end());
   for (int r = 0; r < size; ++r) {
-    const bool listed = std::binary_search(peers.begin(), peers.end(), r);
-    if (!listed && p.sendCount_[static_cast<std::size_t>(r)] > 0)
+    const bool listed = std::binary_search(peers_.begin(), peers_.end(), r);
+    if (!listed && sendCount_[static_cast<std::size_t>(r)] > 0)
       throw Error("CommPlan: rows for rank " + std::to_string(r) + ", not a neighbour");
   }
-  std::vector<MPI_Request> req;
-  for (int r : peers) {
-    if (r == p.me_) {
-      p.recvCount_[static_cast<std::size_t>(r)] = p.sendCount_[static_cast<std::size_t>(r)];
+  requests_.clear();
+  requests_.reserve(2 * peers_.size());
+  for (int r : peers_) {
+    if (r == me_) {
+      recvCount_[static_cast<std::size_t>(r)] = sendCount_[static_cast<std::size_t>(r)];
       continue;
     }
-    req.push_back(
-        comm.irecv(std::span<int>(&p.recvCount_[static_cast<std::size_t>(r)], 1), r, kTagCounts));
+    requests_.push_back(
+        comm_.irecv(std::span<int>(&recvCount_[static_cast<std::size_t>(r)], 1), r, kTagCounts));
   }
-  for (int r : peers)
-    if (r != p.me_)
-      req.push_back(comm.isend(std::span<const int>(&p.sendCount_[static_cast<std::size_t>(r)], 1),
-                               r, kTagCounts));
-  Comm::waitAll(req);
-  p.finish();
-  return p;
+  for (int r : peers_)
+    if (r != me_)
+      requests_.push_back(comm_.isend(
+          std::span<const int>(&sendCount_[static_cast<std::size_t>(r)], 1), r, kTagCounts));
+  Comm::waitAll(requests_);
 }
 
 CommPlan CommPlan::fromDestinations(const Comm& comm, std::span<const int> dest) {

@@ -55,6 +55,18 @@ class CommPlan {
   /// Rebuilds this plan for new destinations (dest[i] for item i), reusing its storage: the
   /// per-step form of fromDestinations (no allocation once the plan has seen its largest size).
   void rebuild(std::span<const int> dest);
+  /// Rebuilds this plan as withNeighbours(comm, rank, index, neighbours) would build it, reusing
+  /// its storage (per-rebuild form: no allocation once the plan has seen its largest size).
+  void rebuild(const Comm& comm, std::span<const int> rank, std::span<const int> index,
+               std::span<const int> neighbours);
+  /// Items already grouped by destination (sendCounts[r] consecutive items for rank r, index =
+  /// position), the import counts learnt from the neighbours only (one message to each); storage
+  /// reused. For rows laid end to end whose lengths vary (the items are then doubles).
+  void rebuildFromCounts(const Comm& comm, std::span<const int> sendCounts,
+                         std::span<const int> neighbours);
+  /// First import / export row of rank r (its rows are importsFrom(r) / exportsTo(r) long).
+  int importOffset(int r) const { return recvOffset_[static_cast<std::size_t>(r)]; }
+  int exportOffset(int r) const { return sendOffset_[static_cast<std::size_t>(r)]; }
 
   /// Items already grouped by destination (sendCounts[r] consecutive items for rank r, index =
   /// position) and the import counts known to the caller (recvCounts[r] from rank r): no
@@ -94,6 +106,8 @@ class CommPlan {
   CommPlan(const Comm& comm, std::span<const int> rank, std::span<const int> index, int);
   void group(std::span<const int> rank, std::span<const int> index);  // exports by rank, stable
   void finish();  // offsets and peer lists from the counts
+  // recvCount_ from one count message to and from each neighbour (validated; no others).
+  void neighbourCounts(std::span<const int> neighbours);
   // Blocks of `send` (offsets sOff in doubles, per rank) to the ranks, blocks from the ranks into
   // `recv` (offsets rOff); the block to this rank itself is copied.
   PlanTraffic exchange(const double* send, const std::vector<long long>& sOff,
@@ -108,6 +122,7 @@ class CommPlan {
   std::vector<int> sendPeers_, recvPeers_;          // other ranks with rows, ascending
   std::vector<long long> sOff_, rOff_;              // scratch: offsets in doubles for one exchange
   std::vector<double> sendBuf_, recvBuf_;
+  std::vector<int> peers_;  // scratch: the neighbours, sorted
   std::vector<MPI_Request> requests_;
 };
 
