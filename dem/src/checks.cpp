@@ -6,7 +6,8 @@
 #include <cstring>
 #include <limits>
 #include <string>
-#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "impl.hpp"
 
@@ -148,14 +149,24 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
   const auto key = [&](long long a, long long b, long long c) {
     return a + nc[0] * (b + nc[1] * c);
   };
-  std::unordered_map<long long, std::vector<std::size_t>> cells;
-  cells.reserve(n);
+  // particles sorted by cube (a flat index; a cube's particles found by binary search)
+  std::vector<std::pair<long long, std::size_t>> byCube(n);
   for (std::size_t i = 0; i < n; ++i)
-    cells[key(cellOf(0, parts.x[0][i]), cellOf(1, parts.x[1][i]), cellOf(2, parts.x[2][i]))]
-        .push_back(i);
-  for (const auto& [k, members] : cells) {
+    byCube[i] = {key(cellOf(0, parts.x[0][i]), cellOf(1, parts.x[1][i]), cellOf(2, parts.x[2][i])),
+                 i};
+  std::sort(byCube.begin(), byCube.end());
+  const auto cube = [&](long long k) {
+    const auto lo = std::lower_bound(byCube.begin(), byCube.end(), std::pair{k, std::size_t{0}});
+    auto hi = lo;
+    while (hi != byCube.end() && hi->first == k) ++hi;
+    return std::pair{lo, hi};
+  };
+  for (auto first = byCube.begin(); first != byCube.end();) {
+    const long long k = first->first;
+    auto last = first;
+    while (last != byCube.end() && last->first == k) ++last;
     const long long c0[3] = {k % nc[0], (k / nc[0]) % nc[1], k / (nc[0] * nc[1])};
-    std::array<std::vector<long long>, 3> near;  // neighbour cells along each axis, no repeats
+    std::array<std::vector<long long>, 3> near;  // neighbour cubes along each axis, no repeats
     for (int d = 0; d < 3; ++d)
       for (long long o = -1; o <= 1; ++o) {
         long long c = c0[d] + o;
@@ -166,10 +177,10 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
     for (long long cz : near[2])
       for (long long cy : near[1])
         for (long long cx : near[0]) {
-          const auto it = cells.find(key(cx, cy, cz));
-          if (it == cells.end()) continue;
-          for (std::size_t i : members)
-            for (std::size_t j : it->second) {
+          const auto [lo, hi] = cube(key(cx, cy, cz));
+          for (auto a = first; a != last; ++a)
+            for (auto b = lo; b != hi; ++b) {
+              const std::size_t i = a->second, j = b->second;
               if (parts.id[j] <= parts.id[i]) continue;  // each pair once
               double d2 = 0;
               for (int d = 0; d < 3; ++d) {
@@ -182,6 +193,7 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
               if (delta > 0) note(delta / std::min(ri, rj), parts.id[i], parts.id[j]);
             }
         }
+    first = last;
   }
   if (worst > limitFrac)
     throw Error(
