@@ -136,11 +136,18 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
         if (r - dist > 0) note((r - dist) / r, parts.id[i], -1);
       }
   }
-  // pairs: a hash of cubes of edge >= the largest diameter, the 27 neighbours of each
-  const double edge = std::max(2 * parts.rMax, 1e-300);
+  // pairs: cubes of edge >= the largest diameter (no more cubes than about 2 per particle), the
+  // 27 neighbours of each
+  double edge = std::max(2 * parts.rMax, 1e-300);
   std::array<long long, 3> nc{};
-  for (int d = 0; d < 3; ++d)
-    nc[d] = std::clamp(static_cast<long long>(std::floor(grid.length[d] / edge)), 1LL, 1LL << 20);
+  for (;;) {
+    for (int d = 0; d < 3; ++d)
+      nc[d] = std::clamp(static_cast<long long>(std::floor(grid.length[d] / edge)), 1LL, 1LL << 20);
+    if (static_cast<double>(nc[0]) * static_cast<double>(nc[1]) * static_cast<double>(nc[2]) <=
+        2.0 * static_cast<double>(n) + 8)
+      break;
+    edge *= 1.25;
+  }
   const auto cellOf = [&](int d, double x) {
     const auto c = static_cast<long long>(
         std::floor((x - grid.origin[d]) / grid.length[d] * static_cast<double>(nc[d])));
@@ -149,22 +156,22 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
   const auto key = [&](long long a, long long b, long long c) {
     return a + nc[0] * (b + nc[1] * c);
   };
-  // particles sorted by cube (a flat index; a cube's particles found by binary search)
-  std::vector<std::pair<long long, std::size_t>> byCube(n);
-  for (std::size_t i = 0; i < n; ++i)
-    byCube[i] = {key(cellOf(0, parts.x[0][i]), cellOf(1, parts.x[1][i]), cellOf(2, parts.x[2][i])),
-                 i};
-  std::sort(byCube.begin(), byCube.end());
-  const auto cube = [&](long long k) {
-    const auto lo = std::lower_bound(byCube.begin(), byCube.end(), std::pair{k, std::size_t{0}});
-    auto hi = lo;
-    while (hi != byCube.end() && hi->first == k) ++hi;
-    return std::pair{lo, hi};
-  };
-  for (auto first = byCube.begin(); first != byCube.end();) {
-    const long long k = first->first;
-    auto last = first;
-    while (last != byCube.end() && last->first == k) ++last;
+  // particles sorted by cube (a counting sort: start[c] .. start[c + 1] in `order`)
+  const auto nCubes = static_cast<std::size_t>(nc[0] * nc[1] * nc[2]);
+  std::vector<std::size_t> start(nCubes + 1, 0), order(n);
+  std::vector<long long> cubeOf(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    cubeOf[i] = key(cellOf(0, parts.x[0][i]), cellOf(1, parts.x[1][i]), cellOf(2, parts.x[2][i]));
+    ++start[static_cast<std::size_t>(cubeOf[i]) + 1];
+  }
+  for (std::size_t c = 0; c < nCubes; ++c) start[c + 1] += start[c];
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) order[fill[static_cast<std::size_t>(cubeOf[i])]++] = i;
+  }
+  for (std::size_t kc = 0; kc < nCubes; ++kc) {
+    if (start[kc] == start[kc + 1]) continue;
+    const auto k = static_cast<long long>(kc);
     const long long c0[3] = {k % nc[0], (k / nc[0]) % nc[1], k / (nc[0] * nc[1])};
     std::array<std::vector<long long>, 3> near;  // neighbour cubes along each axis, no repeats
     for (int d = 0; d < 3; ++d)
@@ -177,10 +184,10 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
     for (long long cz : near[2])
       for (long long cy : near[1])
         for (long long cx : near[0]) {
-          const auto [lo, hi] = cube(key(cx, cy, cz));
-          for (auto a = first; a != last; ++a)
-            for (auto b = lo; b != hi; ++b) {
-              const std::size_t i = a->second, j = b->second;
+          const auto other = static_cast<std::size_t>(key(cx, cy, cz));
+          for (std::size_t a = start[kc]; a < start[kc + 1]; ++a)
+            for (std::size_t b = start[other]; b < start[other + 1]; ++b) {
+              const std::size_t i = order[a], j = order[b];
               if (parts.id[j] <= parts.id[i]) continue;  // each pair once
               double d2 = 0;
               for (int d = 0; d < 3; ++d) {
@@ -193,7 +200,6 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
               if (delta > 0) note(delta / std::min(ri, rj), parts.id[i], parts.id[j]);
             }
         }
-    first = last;
   }
   if (worst > limitFrac)
     throw Error(
