@@ -10,11 +10,9 @@
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/run_config.hpp"
-#include "coloc/core/timers.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/simulation.hpp"
 #include "coloc/dem/dem.hpp"
-#include "coloc/fv/fluid.hpp"
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/setup.hpp"
 #include "run.hpp"
@@ -138,25 +136,22 @@ int checkCase(const CheckOptions& opts) {
     return 0;
   }
 
-  // The particles as the run generates them (deterministic, the same on any rank count), on one
-  // block here; this also runs the DEM's own checks (overlaps, particles outside the box, dt).
+  // The particles as the run generates them (dem::caseParticles, the generator of the run's cost
+  // probe: deterministic, the same on any rank count), and the DEM's own checks of the case
+  // (dem::checkCase: what a DemSolver's construction checks, and the initial overlaps). No solver.
   std::vector<double> particlesPerCell(static_cast<std::size_t>(g.cellCount()), 0.0);
   double particleCount = 0, rMin = 0, rMax = 0;
-  std::vector<int> materialOf;
   const Decomposition one = Decomposition::uniform(self, g, {1, 1, 1});
   const double demDt = cfg.number("particles.dt");
-  if (mode != RunMode::FluidOnly && !cfg.at("particles.sources").empty()) {
-    Timers scratch;
-    dem::DemSolver probe(one, cfg, scratch);
-    const auto& p = probe.particles();
-    const std::size_t n = p.nOwned;
-    particlesPerCell = cellCosts(one, std::span<const double>(p.x[0].data(), n),
-                                 std::span<const double>(p.x[1].data(), n),
-                                 std::span<const double>(p.x[2].data(), n), CostModel{0.0, 1.0});
-    particleCount = static_cast<double>(n);
+  if (mode != RunMode::FluidOnly) {
+    const dem::CaseParticles parts = dem::caseParticles(cfg, g, /*rows=*/true);
+    dem::checkCase(cfg, g, parts);
+    const std::size_t n = parts.x[0].size();
     if (n > 0) {
-      rMin = *std::min_element(p.radius.begin(), p.radius.begin() + static_cast<long>(n));
-      rMax = *std::max_element(p.radius.begin(), p.radius.begin() + static_cast<long>(n));
+      particlesPerCell = cellCosts(one, parts.x[0], parts.x[1], parts.x[2], CostModel{0.0, 1.0});
+      particleCount = static_cast<double>(n);
+      rMin = parts.rMin;
+      rMax = parts.rMax;
     }
   }
   std::printf("coloc check: %.0f particles", particleCount);

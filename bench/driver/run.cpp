@@ -447,6 +447,10 @@ int runCase(const Comm& world, const RunOptions& opts) {
   enum Part { kStep = 0, kOutput, kSeries, kCheckpoint, kRebalance };
   static const char* const kPartName[] = {"the step", "writing the output", "writing series.csv",
                                           "writing the checkpoint", "re-balancing"};
+  // The keys the loop needs, parsed once (no string look-ups inside the loop).
+  const long long rebalanceEvery = coupling::rebalanceInterval(cfg);
+  const long long runSteps = cfg.integer("run.steps");
+  const double runEndTime = cfg.number("run.end_time");
   simulation->beginRun();
   tLoop = MPI_Wtime();
   std::string lastCheckpoint;
@@ -467,7 +471,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
             simulation->writeCheckpoint(checkpoint.pathAt(simulation->steps()));
             lastCheckpoint = checkpoint.pathAt(simulation->steps());
           }
-          if (coupling::rebalanceDue(cfg, simulation->steps())) {
+          if (coupling::rebalanceDue(rebalanceEvery, simulation->steps())) {
             where = kRebalance;
             const auto plan = coupling::planRebalance(*simulation, cfg);
             if (plan.layouts) {
@@ -484,7 +488,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
               }
             }
           }
-          progress->update(*simulation, cfg.integer("run.steps"), cfg.number("run.end_time"));
+          progress->update(*simulation, runSteps, runEndTime);
           // Rank 0's series error, after every collective of the step: agreed cleanly.
           if (root && !series->error().empty()) {
             where = kSeries;

@@ -9,10 +9,14 @@
 
 namespace coloc::coupling {
 
+long long rebalanceInterval(const Config& cfg) {
+  return cfg.string("partition.strategy") == "balanced"
+             ? cfg.integer("partition.rebalance_interval")
+             : 0;
+}
+
 bool rebalanceDue(const Config& cfg, long long steps) {
-  const long long every = cfg.integer("partition.rebalance_interval");
-  return every > 0 && steps > 0 && steps % every == 0 &&
-         cfg.string("partition.strategy") == "balanced";
+  return rebalanceDue(rebalanceInterval(cfg), steps);
 }
 
 RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {

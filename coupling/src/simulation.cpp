@@ -105,6 +105,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   maxSteps_ = cfg.integer("run.steps");
   steadyTol_ = cfg.number("fluid.steady_tol");
   endTime_ = cfg.number("run.end_time");
+  demSubsteps_ = cfg.integer("coupling.dem_substeps");
   if (maxSteps_ == 0 && endTime_ <= 0)
     throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
   // Restart: the checkpoint is checked (status, grid, mode) and read on these blocks.
@@ -249,7 +250,7 @@ void Simulation::step() {
       break;
     }
     case RunMode::ParticlesOnly: {
-      const long long n = std::max<long long>(1, cfg_.integer("coupling.dem_substeps"));
+      const long long n = std::max<long long>(1, demSubsteps_);
       advanceParticles(static_cast<int>(n));
       lastDt_ = static_cast<double>(n) * dem_->dt();
       break;
@@ -257,7 +258,7 @@ void Simulation::step() {
     case RunMode::Coupled:
     case RunMode::DummyDem: {
       // The CFD step is a whole number of DEM steps, as large as the fluid allows.
-      long long nSub = cfg_.integer("coupling.dem_substeps");
+      long long nSub = demSubsteps_;
       if (nSub == 0)
         nSub = std::max<long long>(
             1, static_cast<long long>(std::floor(fluid_->nextDt() / dem_->dt() + 1e-9)));

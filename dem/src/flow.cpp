@@ -15,47 +15,9 @@ namespace coloc::dem {
 using namespace detail;
 
 void DemSolver::Impl::setupFaces(const Config& cfg) {
-  const auto& grid = dec.grid();
-  const bool wallsOn = cfg.boolean("particles.walls");
-  const char* names[3][2] = {{"xlo", "xhi"}, {"ylo", "yhi"}, {"zlo", "zhi"}};
-  for (int d = 0; d < 3; ++d)
-    for (int s = 0; s < 2; ++s) {
-      const std::string key = std::string("particles.boundary.") + names[d][s];
-      const std::string v = cfg.string(key);
-      Face f;
-      if (v == "auto") {
-        f = grid.periodic[d] ? Face::Periodic : (wallsOn ? Face::Wall : Face::Open);
-      } else if (v == "periodic") {
-        if (!grid.periodic[d])
-          throw ConfigError(key,
-                            std::string("periodic needs a periodic fluid axis (domain.periodic.") +
-                                kAxis[d] + " = true)");
-        f = Face::Periodic;
-      } else {
-        if (grid.periodic[d])
-          throw ConfigError(key, "'" + v + "' on a periodic axis (domain.periodic." + kAxis[d] +
-                                     " = true): use periodic or auto");
-        f = v == "wall" ? Face::Wall : Face::Outflow;
-      }
-      face[d][s] = f;
-      anyOutflow = anyOutflow || f == Face::Outflow;
-    }
-  for (std::size_t n = 0; n < inflow.size(); ++n) {
-    const auto& f = inflow[n];
-    if (face[f.axis][f.side] == Face::Outflow)
-      throw ConfigError("particles.inflow[" + std::to_string(n) + "].face",
-                        std::string("the face ") + names[f.axis][f.side] +
-                            " is an outflow face (particles.boundary): the particles would "
-                            "leave as they enter");
-    for (std::size_t m = 0; m < n; ++m) {
-      const auto& g = inflow[m];
-      if (g.axis == f.axis && g.side == f.side && f.pmin[0] < g.pmax[0] && g.pmin[0] < f.pmax[0] &&
-          f.pmin[1] < g.pmax[1] && g.pmin[1] < f.pmax[1])
-        throw ConfigError(
-            "particles.inflow[" + std::to_string(n) + "].patch",
-            "overlaps the patch of particles.inflow[" + std::to_string(m) + "] on the same face");
-    }
-  }
+  face = detail::faceKinds(cfg, dec.grid(), inflow);  // checks.cpp (also `coloc check`)
+  for (const auto& side : face)
+    for (const Face f : side) anyOutflow = anyOutflow || f == Face::Outflow;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -34,6 +34,30 @@ using detail::Material;
 using detail::Model;
 using detail::PairCoeff;
 
+namespace detail {
+/// The condition of a box face (particles.boundary); Open = no wall (particles.walls false).
+enum class Face { Wall, Outflow, Periodic, Open };
+using FaceKinds = std::array<std::array<Face, 2>, 3>;  // [axis][low, high]
+/// particles.boundary resolved against the fluid's periodic axes and the inflow patches
+/// (checks.cpp; ConfigError naming the key).
+FaceKinds faceKinds(const Config& cfg, const GlobalGrid& grid,
+                    const std::vector<InflowInfo>& inflow);
+/// particles.materials and particles.wall_material, checked (checks.cpp).
+std::vector<Material> readMaterials(const Config& cfg);
+/// The time-step check (checks.cpp): particles.dt against particles.dt_fraction of the Rayleigh
+/// (Hertz) or collision (linear) time of the smallest particle of each material (infinity: none)
+/// and of the inflow's smallest; ConfigError on particles.dt.
+struct TimeStepInput {
+  double dt, fraction;
+  Model model;
+  double kn;
+  const std::vector<Material>& mats;
+  const std::vector<InflowInfo>& inflow;
+  const std::vector<double>& rMinOfMaterial;
+};
+void checkTimeStep(const TimeStepInput& in);
+}  // namespace detail
+
 struct DemSolver::Impl {
   Impl(const Decomposition& d, const Config& cfg, Timers& t, DemState* initial = nullptr);
 
@@ -59,7 +83,7 @@ struct DemSolver::Impl {
   // rank (not only the boundary blocks); Open = no wall (particles.walls false): a particle
   // leaving is an error. Every member of `flow` except the out ones is global and identical on
   // every rank (the out ones count this rank's removals).
-  enum class Face { Wall, Outflow, Periodic, Open };
+  using Face = detail::Face;
   std::array<std::array<Face, 2>, 3> face{};
   bool anyOutflow = false;
   std::vector<detail::InflowInfo> inflow;

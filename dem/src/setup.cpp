@@ -105,23 +105,10 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
 }
 
 void DemSolver::Impl::readMaterials(const Config& cfg) {
-  const auto& list = cfg.at("particles.materials");
-  for (const auto& m : list) {
-    Material mt;
-    mt.density = m["density"].get<double>();
-    mt.young = m["young"].get<double>();
-    mt.poisson = m["poisson"].get<double>();
-    mt.restitution = m["restitution"].get<double>();
-    mt.friction = m["friction"].get<double>();
-    mt.rollingFriction = m["rolling_friction"].get<double>();
-    mats.push_back(mt);
-  }
+  mats = detail::readMaterials(cfg);  // checks.cpp (also `coloc check`)
   nMat = static_cast<int>(mats.size());
   if (nMat == 0) return;
   const auto wm = cfg.integer("particles.wall_material");
-  if (wm >= nMat)
-    throw ConfigError("particles.wall_material",
-                      "no such material (" + std::to_string(nMat) + " declared)");
   const double kn = cfg.number("particles.linear.kn");
   const double ktr = cfg.number("particles.linear.kt_ratio");
   pairC.resize(static_cast<std::size_t>(nMat * nMat));
@@ -211,7 +198,7 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
   bins.setup(grid, b, dec.lo(), dec.hi());
 }
 
-CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid) {
+CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid, bool rows) {
   const int nMat = static_cast<int>(cfg.at("particles.materials").size());
   const auto info = detail::inspectSources(cfg, grid, nMat);
   double rmax = 0;
@@ -232,8 +219,20 @@ CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid) {
   std::size_t count = 0;
   detail::generate(cfg, info, lo, hi, all, [&count](const detail::NewParticle&) { ++count; });
   for (auto& x : out.x) x.reserve(count);
-  detail::generate(cfg, info, lo, hi, all, [&out](const detail::NewParticle& q) {
+  if (rows) {
+    out.radius.reserve(count);
+    out.id.reserve(count);
+  }
+  out.rMinOfMaterial.assign(static_cast<std::size_t>(nMat),
+                            std::numeric_limits<double>::infinity());
+  detail::generate(cfg, info, lo, hi, all, [&out, rows](const detail::NewParticle& q) {
     for (int d = 0; d < 3; ++d) out.x[d].push_back(q.x[d]);
+    if (rows) {
+      out.radius.push_back(q.radius);
+      out.id.push_back(q.id);
+    }
+    auto& rm = out.rMinOfMaterial[static_cast<std::size_t>(q.material)];
+    rm = std::min(rm, q.radius);
     out.rMin = out.x[0].size() == 1 ? q.radius : std::min(out.rMin, q.radius);
     out.rMax = std::max(out.rMax, q.radius);
   });
@@ -241,35 +240,19 @@ CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid) {
 }
 
 void DemSolver::Impl::checkTimeStep() {
-  // Rayleigh time (Hertz): pi r sqrt(rho/G) / (0.1631 nu + 0.8766), G = E/(2(1+nu))
-  // (Li, Xu & Thornton 2005); linear: collision time pi sqrt(m*/k_n) with m* = m_min/2.
-  // The particles to come (inflow) count with the smallest radius of their distribution.
-  double tLim = std::numeric_limits<double>::infinity();
-  const auto limit = [&](int mat, double r, double mass) {
-    const auto& m = mats[static_cast<std::size_t>(mat)];
-    double t;
-    if (model == Model::HertzMindlin) {
-      const double G = m.young / (2 * (1 + m.poisson));
-      t = M_PI * r * std::sqrt(m.density / G) / (0.1631 * m.poisson + 0.8766);
-    } else {
-      t = M_PI * std::sqrt(0.5 * mass / pairC[0].kn);
-    }
-    tLim = std::min(tLim, t);
-  };
-  for (std::size_t i = 0; i < p.nOwned; ++i) limit(p.material[i], p.radius[i], p.mass[i]);
-  for (const auto& f : inflow) {
-    const double r = f.size.rmin();
-    limit(f.material, r, massOf(f.material, r));
+  // The check of `coloc check` (checks.cpp) on the smallest radius of each material over all
+  // ranks: the limit grows with the radius, so this is the smallest limit over the particles.
+  std::vector<double> negMin(static_cast<std::size_t>(nMat),
+                             -std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < p.nOwned; ++i) {
+    const auto m = static_cast<std::size_t>(p.material[i]);
+    if (m < negMin.size()) negMin[m] = std::max(negMin[m], -p.radius[i]);
   }
-  tLim = comm.min(tLim);
-  if (!std::isfinite(tLim)) return;
-  if (dt > dtFraction * tLim) {
-    const char* what = model == Model::HertzMindlin ? "Rayleigh time" : "linear collision time";
-    throw ConfigError("particles.dt", "time step " + fmt(dt) + " s is above " + fmt(dtFraction) +
-                                          " of the " + what + " " + fmt(tLim) +
-                                          " s of the smallest particle: use at most " +
-                                          fmt(dtFraction * tLim) + " s");
-  }
+  comm.maxInPlace(std::span<double>(negMin));
+  std::vector<double> rMin(negMin.size());
+  for (std::size_t m = 0; m < rMin.size(); ++m) rMin[m] = -negMin[m];
+  detail::checkTimeStep(
+      {dt, dtFraction, model, pairC.empty() ? 0.0 : pairC[0].kn, mats, inflow, rMin});
 }
 
 void DemSolver::Impl::addParticle(const detail::NewParticle& q) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "dem_test_util.hpp"
 
@@ -93,6 +94,77 @@ TEST(DemSetup, SourceErrors) {
   msg = failure<coloc::ConfigError>(caseText(kMat + R"(, "sources": [{"type": "list",
       "positions": [0.05, 0.05, 0.15], "radius": 0.001}])"));
   EXPECT_NE(msg.find("outside the box"), std::string::npos) << msg;
+}
+
+/// Message of dem::checkCase on the case (no solver; "" if it passes).
+std::string checkFailure(const std::string& text) {
+  const coloc::Config cfg = demtest::config(text);
+  const coloc::GlobalGrid g = coloc::gridFromConfig(cfg);
+  try {
+    coloc::dem::checkCase(cfg, g, coloc::dem::caseParticles(cfg, g, /*rows=*/true));
+  } catch (const coloc::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DemSetup, CaseChecksWithoutSolverRejectWhatConstructionRejects) {
+  // `coloc check` runs dem::checkCase: every case a DemSolver's construction refuses with a
+  // ConfigError, it refuses with the same message; valid cases pass.
+  const std::string twoMats =
+      R"("materials": [{"density": 2500, "young": 1e7, "poisson": 0.3, "restitution": 0.9},
+                       {"density": 900, "young": 1e6, "poisson": 0.4, "restitution": 0.9}])";
+  const std::vector<std::string> refused = {
+      caseText(kMat + R"(, "dt": 1e-3, "sources": [{"type": "list",
+          "positions": [0.05, 0.05, 0.05], "radius": 0.002}])"),
+      // the limit from the smaller particle of the softer material, not the smallest overall
+      caseText(twoMats + R"(, "dt": 2.4e-5, "sources": [{"type": "list",
+          "positions": [0.03, 0.05, 0.05], "radius": 0.001}, {"type": "list",
+          "positions": [0.07, 0.05, 0.05], "radius": 0.002, "material": 1}])"),
+      caseText(kMat + R"(, "dt": 1e-6, "bin_cells": 3, "sources": [{"type": "list",
+          "positions": [0.05, 0.05, 0.05], "radius": 0.002}])"),
+      caseText(kMat + R"(, "dt": 1e-6, "wall_material": 2, "sources": [{"type": "list",
+          "positions": [0.05, 0.05, 0.05], "radius": 0.002}])"),
+      caseText(kMat + R"(, "dt": 1e-6, "boundary": {"xlo": "periodic"}, "sources": [{"type":
+          "list", "positions": [0.05, 0.05, 0.05], "radius": 0.002}])"),
+      caseText(kMat + R"(, "sources": [{"type": "list", "positions": [0.05, 0.05, 0.15],
+          "radius": 0.001}])")};
+  for (const auto& text : refused) {
+    const std::string run = failure<coloc::ConfigError>(text);
+    ASSERT_FALSE(run.empty()) << text;
+    EXPECT_EQ(checkFailure(text), run) << text;
+  }
+  const std::string ok = caseText(twoMats + R"(, "dt": 1e-6, "sources": [{"type": "list",
+      "positions": [0.09, 0.09, 0.09], "radius": 0.001}, {"type": "lattice", "lo": [0.01, 0.01,
+      0.01], "spacing": [0.01, 0.01, 0.01], "counts": [8, 8, 8], "radius": 0.002,
+      "material": 1}])");
+  EXPECT_EQ(failure(ok), "");
+  EXPECT_EQ(checkFailure(ok), "");
+}
+
+TEST(DemSetup, CaseChecksWithoutSolverFindInitialOverlaps) {
+  // particles that overlap each other, a wall, or each other across a periodic face
+  const auto pair = checkFailure(caseText(kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
+      "positions": [0.08, 0.08, 0.08, 0.0828, 0.08, 0.08], "radius": 0.002}])"));
+  EXPECT_NE(pair.find("particle 0 overlaps particle 1 by 0.6"), std::string::npos) << pair;
+  EXPECT_NE(pair.find("overlap_limit"), std::string::npos) << pair;
+  const auto wall = checkFailure(caseText(kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
+      "positions": [0.0005, 0.05, 0.05], "radius": 0.002}])"));
+  EXPECT_NE(wall.find("particle 0 overlaps a wall"), std::string::npos) << wall;
+  const std::string periodic = R"("length": [0.1, 0.1, 0.1], "cells": [10, 10, 10],
+      "periodic": {"x": true})";
+  const auto across = checkFailure(caseText(kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
+      "positions": [0.0005, 0.05, 0.05, 0.0985, 0.05, 0.05], "radius": 0.002}])",
+                                            periodic));
+  EXPECT_NE(across.find("particle 0 overlaps particle 1"), std::string::npos) << across;
+  EXPECT_FALSE(failure(caseText(kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
+      "positions": [0.0005, 0.05, 0.05, 0.0985, 0.05, 0.05], "radius": 0.002}])",
+                                periodic))
+                   .empty());
+  // touching is not overlapping beyond the limit
+  EXPECT_EQ(checkFailure(caseText(kMat + R"(, "dt": 1e-6, "sources": [{"type": "list",
+      "positions": [0.05, 0.05, 0.05, 0.054, 0.05, 0.05], "radius": 0.002}])")),
+            "");
 }
 
 TEST(DemSetup, FrozenParticlesDoNotMove) {

@@ -27,6 +27,13 @@ struct RebalancePlan {
   double gain = 1.0;               // current / new modelled largest block cost
 };
 
+/// The steps between re-balances the case asks for (partition.rebalance_interval in balanced
+/// runs; 0: never). Parsed once, before the time loop.
+long long rebalanceInterval(const Config& cfg);
+/// Whether a re-balance is due after `steps` steps with that interval.
+inline bool rebalanceDue(long long every, long long steps) {
+  return every > 0 && steps > 0 && steps % every == 0;
+}
 /// Whether the case asks for a re-balance after `steps` steps (balanced runs only).
 bool rebalanceDue(const Config& cfg, long long steps);
 /// The new blocks for the particles as they are now. Collective.

@@ -203,6 +203,7 @@ class Simulation {
   DragLaw drag_ = DragLaw::DiFelice;
   SelfVelocity selfVelocity_ = SelfVelocity::None;
   double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6, steadyTol_ = 0;
+  long long demSubsteps_ = 0;  // coupling.dem_substeps (0: as many as the fluid's step allows)
   bool coupled_ = false;
 
   // Cell fields on the fluid's cell layout.

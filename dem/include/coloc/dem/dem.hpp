@@ -140,15 +140,27 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
                     long long total);
 
 /// Every particle of the case as a run creates it (the same generator and sources, whatever the
-/// rank count), without building a solver: centres only, and the sizes the bins follow. For
-/// `coloc plan`, which partitions them for rank counts it does not run.
+/// rank count), without building a solver: centres, and the sizes the bins follow; with `rows`
+/// also each particle's radius and global id (checkCase's overlap check). For `coloc plan` and
+/// `coloc check`, which lay them out for rank counts they do not run.
 struct CaseParticles {
   std::array<std::vector<double>, 3> x;
+  std::vector<double> radius;            // with rows only
+  std::vector<std::int64_t> id;          // with rows only
   double dmax = 0, skin = 0, range = 0;  // largest diameter, skin, interaction range (m)
   double rMin = 0, rMax = 0;             // smallest, largest radius generated (0: none)
+  std::vector<double> rMinOfMaterial;    // smallest radius of each material (inf: none)
   long long total = 0;
 };
-CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid);
+CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid, bool rows = false);
+
+/// The DEM's checks of a case, without a solver (`coloc check`), in the order a DemSolver's
+/// construction makes them and with the same functions and messages: materials, sources, inflow,
+/// face conditions, bins (one block; a run's blocks are checked as it builds them), the time
+/// step against the smallest particle of each material (particles.dt_fraction), and, where
+/// `particles` holds rows, the largest initial overlap against particles.overlap_limit. Throws
+/// ConfigError naming the key (coloc::Error for an overlap).
+void checkCase(const Config& cfg, const GlobalGrid& grid, const CaseParticles& particles);
 
 class DemSolver {
  public:
