@@ -81,7 +81,9 @@ TEST(ParticleFields, SurviveInMemoryRebalance) {
   coupling::Layouts to = shifted(sim->decomposition());
   const auto cutsBefore = sim->decomposition().cuts();
   sim = coupling::applyRebalance(std::move(sim), cfg, std::move(to));
-  if (world.size() > 1) EXPECT_NE(sim->decomposition().cuts(), cutsBefore);
+  if (world.size() > 1) {
+    EXPECT_NE(sim->decomposition().cuts(), cutsBefore);
+  }
   const auto& q = sim->particles()->particles();
   ASSERT_EQ(q.extra.size(), 2u);
   EXPECT_EQ(q.extra[0].name, "tag");
