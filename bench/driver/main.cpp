@@ -17,11 +17,11 @@
 #include <iostream>
 #include <sstream>
 
+#include "check.hpp"
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
-#include "check.hpp"
-#include "plan.hpp"
 #include "coloc/core/failure.hpp"
+#include "plan.hpp"
 #include "run.hpp"
 
 int main(int argc, char** argv) {
@@ -53,9 +53,10 @@ int main(int argc, char** argv) {
                    "only the keys under this path, e.g. particles.sources or fluid.dt");
   coloc::CheckOptions check;
   auto* checkCmd = app.add_subcommand(
-      "check", "validate a case and print the layout each partition strategy would choose for N "
-               "ranks, cells and particles a rank, the memory estimate and the time-step limits; "
-               "runs nothing, in one process (exit 0: valid, 2: a run would be refused)");
+      "check",
+      "validate a case and print the layout each partition strategy would choose for N "
+      "ranks, cells and particles a rank, the memory estimate and the time-step limits; "
+      "runs nothing, in one process (exit 0: valid, 2: a run would be refused)");
   checkCmd->add_option("case", check.casePath, "case file (JSON, // comments allowed)")->required();
   checkCmd->add_option("--ranks", check.ranks, "rank count to lay the case out for (default 1)");
   checkCmd->add_option("--set", check.overrides, "override a case key (repeatable)")
@@ -64,9 +65,10 @@ int main(int argc, char** argv) {
   checkCmd->add_flag("--cuts", check.verbose, "print every strategy's cuts");
   coloc::PlanOptions planOpts;
   auto* plan = app.add_subcommand(
-      "plan", "the blocks each strategy chooses for rank counts that are not run, and each "
-              "rank's cells, particles, ghosts and exchange bytes/messages per step (one "
-              "process): DIR/plan.json, DIR/plan.csv");
+      "plan",
+      "the blocks each strategy chooses for rank counts that are not run, and each "
+      "rank's cells, particles, ghosts and exchange bytes/messages per step (one "
+      "process): DIR/plan.json, DIR/plan.csv");
   plan->add_option("case", planOpts.casePath, "case file")->required();
   plan->add_option("--ranks", planOpts.ranks, "rank counts, comma-separated, e.g. 28,56,1024")
       ->required();
@@ -93,9 +95,9 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("keys")) {
       const std::string text = coloc::describeKeys(keysPrefix);  // same verdict on every rank
-      if (world.isRoot()) std::cout << (keysPrefix.empty() ? "" : "Case-file keys under '" +
-                                                                       keysPrefix + "':\n")
-                                    << text;
+      if (world.isRoot())
+        std::cout << (keysPrefix.empty() ? "" : "Case-file keys under '" + keysPrefix + "':\n")
+                  << text;
       return 0;
     }
     if (app.got_subcommand("check")) {

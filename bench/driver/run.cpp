@@ -74,8 +74,8 @@ class Progress {
 /// output.series_particles / output.series_particle_ids, and the bed diagnostics
 /// (diagnostics.hpp) on the steps of output.diagnostics_interval and the last step (empty fields
 /// in the other rows).
-/// Rank 0 writes the header to series.csv.tmp and renames it (an old series.csv is replaced whole), then
-/// appends each row with one write(); a row that cannot be written whole is cut off again
+/// Rank 0 writes the header to series.csv.tmp and renames it (an old series.csv is replaced whole),
+/// then appends each row with one write(); a row that cannot be written whole is cut off again
 /// (ftruncate), so the file holds whole rows only, and the error waits in error() for the step's
 /// agreement (no extra collective).
 class Series {
@@ -372,7 +372,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
   std::unique_ptr<coupling::Simulation> simulation;
   long long rebalances = 0;
   double setupWall = 0, tLoop = 0;
-  Json written;  // the last report written
+  Json written;                                   // the last report written
   std::optional<BedDiagnostics> lastDiagnostics;  // of the last series row that had them
   const auto writeReport = [&](const char* status, int code, const std::string& error,
                                const std::string& state, int sig) -> std::string {

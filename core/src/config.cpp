@@ -333,8 +333,7 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         checkRange(path, v.get<double>(), spec.range);
         out[key] = v.get<double>();
         break;
-      case KeyKind::Integer:
-      {
+      case KeyKind::Integer: {
         const long long n = integerOf(path, v);
         checkRange(path, static_cast<double>(n), spec.range);
         out[key] = n;
@@ -372,8 +371,7 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
             arr.push_back(n);
             continue;
           }
-          if (!isNumber(v[i]))
-            throw ConfigError(ip, "expected a number, got " + typeName(v[i]));
+          if (!isNumber(v[i])) throw ConfigError(ip, "expected a number, got " + typeName(v[i]));
           checkRange(ip, v[i].get<double>(), spec.range);
           arr.push_back(v[i].get<double>());
         }
@@ -523,17 +521,22 @@ std::string whereIs(const std::string& text, const std::string& token) {
   std::size_t pos = text.find(token);
   for (; pos != std::string::npos; pos = text.find(token, pos + 1)) {
     const auto bol = text.rfind('\n', pos);
-    const std::string before = text.substr(bol == std::string::npos ? 0 : bol, pos - (bol == std::string::npos ? 0 : bol));
+    const std::string before =
+        text.substr(bol == std::string::npos ? 0 : bol, pos - (bol == std::string::npos ? 0 : bol));
     const char prev = pos > 0 ? text[pos - 1] : ' ';
-    if (before.find("//") == std::string::npos && prev != '\'' && prev != '"' && !std::isalnum(static_cast<unsigned char>(prev))) break;
+    if (before.find("//") == std::string::npos && prev != '\'' && prev != '"' &&
+        !std::isalnum(static_cast<unsigned char>(prev)))
+      break;
   }
   if (pos == std::string::npos) return "";
-  const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n');
+  const auto line =
+      1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n');
   std::string where = "line " + std::to_string(line);
   const auto colon = text.rfind(':', pos);
   if (colon != std::string::npos) {
     const auto q2 = text.rfind('"', colon);
-    const auto q1 = q2 == std::string::npos || q2 == 0 ? std::string::npos : text.rfind('"', q2 - 1);
+    const auto q1 =
+        q2 == std::string::npos || q2 == 0 ? std::string::npos : text.rfind('"', q2 - 1);
     if (q1 != std::string::npos) where += ", key \"" + text.substr(q1 + 1, q2 - q1 - 1) + "\"";
   }
   return where;
@@ -590,8 +593,8 @@ Config Config::load(const Comm& comm, const std::string& path,
         text.append(buf.data(), static_cast<std::size_t>(in.gcount()));
       }
       if (text.size() > kMaxCaseFileBytes) {
-        err = "case file '" + path + "' is larger than " +
-              std::to_string(kMaxCaseFileBytes >> 20) + " MiB: not a case file";
+        err = "case file '" + path + "' is larger than " + std::to_string(kMaxCaseFileBytes >> 20) +
+              " MiB: not a case file";
         text.clear();
       } else if (in.bad()) {
         err = "cannot read case file '" + path + "'";

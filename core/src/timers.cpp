@@ -20,7 +20,8 @@ void Timers::start(Phase p) {
     outer.wall += wall - outer.wall0;
     outer.cpu += cpu - outer.cpu0;
   }
-  if (nActive_ < static_cast<int>(active_.size())) active_[static_cast<std::size_t>(nActive_++)] = p;
+  if (nActive_ < static_cast<int>(active_.size()))
+    active_[static_cast<std::size_t>(nActive_++)] = p;
   s.wall0 = wall;
   s.cpu0 = cpu;
 }

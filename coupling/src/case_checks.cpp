@@ -104,9 +104,10 @@ void checkBoundaries(const Config& cfg, std::vector<std::string>& notes) {
     if (type == "outlet") outlet = true;
   }
   if (!inlet.empty() && !outlet)
-    throw ConfigError(inlet,
-                      "an inlet but no outlet on any face: the inflow has nowhere to go "
-                      "(incompressible fluid); make a face an outlet (type outlet) or add an outlet patch");
+    throw ConfigError(
+        inlet,
+        "an inlet but no outlet on any face: the inflow has nowhere to go "
+        "(incompressible fluid); make a face an outlet (type outlet) or add an outlet patch");
   if (runMode(cfg) == RunMode::FluidOnly && cfg.at("particles.sources").size() > 0)
     notes.push_back("run.mode = fluid: particles.sources are not used");
 }

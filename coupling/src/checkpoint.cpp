@@ -365,8 +365,7 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
     if (!(std::isfinite(p.mass[i]) && p.mass[i] > 0))
       bad("mass", i, "has mass " + g9(p.mass[i]) + " (must be positive and finite)");
     if (!(std::isfinite(p.radius[i]) && p.radius[i] > 0))
-      bad("radius", i,
-          "has radius " + g9(p.radius[i]) + " (must be positive and finite)");
+      bad("radius", i, "has radius " + g9(p.radius[i]) + " (must be positive and finite)");
     if (p.material[i] < 0 || static_cast<std::size_t>(p.material[i]) >= materials)
       bad("material", i,
           "has material " + std::to_string(p.material[i]) + ", the case has " +
@@ -382,10 +381,12 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
       if (!std::isfinite(x))
         bad("x", i, "has a position that is not finite");
       else if (!grid.periodic[d] && (x < lo - tol || x > hi + tol))
-        bad("x", i, std::string("is outside the box along ") + kAxis[d] + " (" +
-                        g9(x) + " m, box [" + g9(lo) + ", " + g9(hi) + "])");
+        bad("x", i,
+            std::string("is outside the box along ") + kAxis[d] + " (" + g9(x) + " m, box [" +
+                g9(lo) + ", " + g9(hi) + "])");
       for (const auto* a : {&p.v, &p.omega, &p.f, &p.torque, &p.fExt})
-        if (!std::isfinite((*a)[d][i])) bad("v, omega, f, torque, f_ext", i, "has a value that is not finite");
+        if (!std::isfinite((*a)[d][i]))
+          bad("v, omega, f, torque, f_ext", i, "has a value that is not finite");
     }
   }
   // Ids unique over all ranks, and every contact history held by (and pointing at) an existing
@@ -410,8 +411,9 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
   for (std::size_t c = 0; c < s.contacts.size() && err.empty(); ++c) {
     const auto& h = s.contacts[c];
     if (!known(h.holder))
-      err = group + "/contacts/holder: row " + std::to_string(c) + " of this rank's share names id " +
-            std::to_string(h.holder) + ", which no particle has";
+      err = group + "/contacts/holder: row " + std::to_string(c) +
+            " of this rank's share names id " + std::to_string(h.holder) +
+            ", which no particle has";
     else if (h.partner < -6 || (h.partner >= 0 && !known(h.partner)))  // walls: -1..-6
       err = group + "/contacts/partner: row " + std::to_string(c) +
             " of this rank's share names id " + std::to_string(h.partner) +

@@ -74,7 +74,8 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
       evaluateLayout(g, cost, even);
       evenImbalance = even.imbalance();
       for (int d = 0; d < 3; ++d) packed.push_back(best.dims[d]);
-      for (int d = 0; d < 3; ++d) packed.insert(packed.end(), best.cuts[d].begin(), best.cuts[d].end());
+      for (int d = 0; d < 3; ++d)
+        packed.insert(packed.end(), best.cuts[d].begin(), best.cuts[d].end());
     } catch (const Error& e) {
       err = e.what();
     }
@@ -94,12 +95,17 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
   std::array<std::vector<int>, 3> cuts;
   std::size_t q = 3;
   for (int d = 0; d < 3; ++d) {
-    cuts[d].assign(packed.begin() + static_cast<std::ptrdiff_t>(q),
-                   packed.begin() + static_cast<std::ptrdiff_t>(q) + packed[static_cast<std::size_t>(d)] + 1);
+    cuts[d].assign(
+        packed.begin() + static_cast<std::ptrdiff_t>(q),
+        packed.begin() + static_cast<std::ptrdiff_t>(q) + packed[static_cast<std::size_t>(d)] + 1);
     q += static_cast<std::size_t>(packed[static_cast<std::size_t>(d)]) + 1;
   }
-  Layouts L{Decomposition::fromCuts(comm, g, std::move(cuts)), std::nullopt, "balanced",
-            plan.model, verdict[1], evenImbalance};
+  Layouts L{Decomposition::fromCuts(comm, g, std::move(cuts)),
+            std::nullopt,
+            "balanced",
+            plan.model,
+            verdict[1],
+            evenImbalance};
   plan.layouts = std::move(L);
   return plan;
 }

@@ -126,8 +126,8 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
       dem::DemState state = readDemState(*file, "/particles");
       validateDemState(dec_.comm(), state, dec_.grid(), cfg.at("particles.materials").size(),
                        *checkpoint);
-      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
-                                              std::move(state));
+      dem_ =
+          std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_, std::move(state));
     } else if (from) {
       // The DEM's own restoring constructor sends every row to the owner of its position.
       dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,

@@ -1,10 +1,10 @@
 #include "coloc/partition/balance.hpp"
 
+#include <mpi.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <mpi.h>
 
 #include "coloc/core/error.hpp"
 
@@ -147,9 +147,8 @@ std::vector<double> cellCostsOnRoot(const Decomposition& dec, std::span<const do
     bool in = true;
     for (int d = 0; d < 3; ++d) in = in && c[d] >= lo[d] && c[d] < lo[d] + n[d];
     if (in) {
-      local[static_cast<std::size_t>((c[0] - lo[0]) +
-                                     n[0] * ((c[1] - lo[1]) + n[1] * (c[2] - lo[2])))] +=
-          model.perParticle;
+      local[static_cast<std::size_t>(
+          (c[0] - lo[0]) + n[0] * ((c[1] - lo[1]) + n[1] * (c[2] - lo[2])))] += model.perParticle;
     } else {
       outside.push_back(static_cast<double>(c[0] + g.cells[0] * (c[1] + g.cells[1] * c[2])));
       outside.push_back(model.perParticle);
@@ -179,9 +178,8 @@ std::vector<double> cellCostsOnRoot(const Decomposition& dec, std::span<const do
     for (int k = 0; k < rn[2]; ++k)
       for (int j = 0; j < rn[1]; ++j)
         for (int i = 0; i < rn[0]; ++i, ++q)
-          cost[static_cast<std::size_t>((rl[0] + i) +
-                                        g.cells[0] * ((rl[1] + j) + g.cells[1] * (rl[2] + k)))] +=
-              v[q];
+          cost[static_cast<std::size_t>(
+              (rl[0] + i) + g.cells[0] * ((rl[1] + j) + g.cells[1] * (rl[2] + k)))] += v[q];
     for (; q + 1 < static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]); q += 2)
       cost[static_cast<std::size_t>(v[q])] += v[q + 1];
   }

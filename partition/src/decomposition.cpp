@@ -80,9 +80,9 @@ Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims, int 
   throw ConfigError("partition.dims",
                     "no process grid of " + std::to_string(size) +
                         " ranks gives every block at least " + std::to_string(minCells) +
-                        " cells along every axis (domain.cells = " +
-                        std::to_string(grid.cells[0]) + " x " + std::to_string(grid.cells[1]) +
-                        " x " + std::to_string(grid.cells[2]) +
+                        " cells along every axis (domain.cells = " + std::to_string(grid.cells[0]) +
+                        " x " + std::to_string(grid.cells[1]) + " x " +
+                        std::to_string(grid.cells[2]) +
                         (fixed > 1 ? ", partition.dims fixes " + std::to_string(fixed) : "") +
                         "): use fewer ranks, more cells (domain.cells) or other partition.dims");
 }

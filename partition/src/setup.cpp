@@ -64,16 +64,14 @@ Int3 processGridFromConfig(const Config& cfg, int ranks) {
   const auto d = cfg.intVec3("partition.dims");
   return Decomposition::chooseDims(
       ranks, gridFromConfig(cfg),
-      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])},
-      minBlockCells(cfg));
+      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])}, minBlockCells(cfg));
 }
 
 Decomposition decompositionFromConfig(const Comm& world, const Config& cfg) {
   const auto d = cfg.intVec3("partition.dims");
   return Decomposition::uniform(
       world, gridFromConfig(cfg),
-      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])},
-      minBlockCells(cfg));
+      {static_cast<int>(d[0]), static_cast<int>(d[1]), static_cast<int>(d[2])}, minBlockCells(cfg));
 }
 
 }  // namespace coloc

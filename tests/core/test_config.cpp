@@ -125,5 +125,6 @@ TEST(Config, NumbersPastTheirTypeDuplicatesAndOverflow) {
   EXPECT_EQ(errorOf("// 1e400 in a comment\n{" + base + ",\n \"fluid\": { \"nu\": 1e400 } }"),
             "case.json: number '1e400' is beyond what a double holds (about 1.8e308) at line 3, "
             "key \"nu\"");
-  EXPECT_EQ(errorOf("{" + base + "}", {"fluid.nu=1e400"}), "fluid.nu: expected a number, got a string");
+  EXPECT_EQ(errorOf("{" + base + "}", {"fluid.nu=1e400"}),
+            "fluid.nu: expected a number, got a string");
 }

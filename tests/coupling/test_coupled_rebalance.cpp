@@ -56,8 +56,8 @@ std::vector<double> histories(coupling::Simulation& sim) {
   const dem::DemState s = sim.particles()->saveState();
   for (const auto& c : s.contacts) {
     const auto a = std::min(c.holder, c.partner), b = std::max(c.holder, c.partner);
-    const double n = std::sqrt(c.shear[0] * c.shear[0] + c.shear[1] * c.shear[1] +
-                               c.shear[2] * c.shear[2]);
+    const double n =
+        std::sqrt(c.shear[0] * c.shear[0] + c.shear[1] * c.shear[1] + c.shear[2] * c.shear[2]);
     double& slot = h[static_cast<std::size_t>(a * kCount + b)];
     slot = std::max(slot, n);
   }
@@ -93,8 +93,8 @@ TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
                          ("coloc_rebalance_" + std::to_string(::getpid()) + ".h5"))
                             .string());
     // Start on even blocks although most of the box is empty of particles.
-    coupling::Layouts even{decompositionFromConfig(world, cfg), std::nullopt, "balanced",
-                           CostModel{}, 1.0, 1.0};
+    coupling::Layouts even{
+        decompositionFromConfig(world, cfg), std::nullopt, "balanced", CostModel{}, 1.0, 1.0};
     auto sim = std::make_unique<coupling::Simulation>(cfg, std::move(even));
     coupling::Simulation ser(Comm(selfRaw), serialCfg);
     int moves = 0;

@@ -62,7 +62,8 @@ TEST(FvErrors, BadPatchesNameTheKey) {
   EXPECT_NE(e.find("fluid.patches[0].face"), std::string::npos) << e;
   EXPECT_NE(e.find("periodic"), std::string::npos) << e;
   // Containing no cell face centre (xhi: y cells of 1/6, centres at 1/12, 3/12, ...).
-  e = errorOf(kBox, {R"(fluid.patches=[{"type":"outlet","face":"xhi","min":[0.4,0.3],"max":[0.6,0.7]},
+  e = errorOf(kBox,
+              {R"(fluid.patches=[{"type":"outlet","face":"xhi","min":[0.4,0.3],"max":[0.6,0.7]},
                                        {"type":"outlet","face":"xhi","min":[0.0,0.0],"max":[0.01,1]}])"});
   EXPECT_NE(e.find("fluid.patches[1]"), std::string::npos) << e;
   EXPECT_NE(e.find("no cell face centre"), std::string::npos) << e;
@@ -70,7 +71,8 @@ TEST(FvErrors, BadPatchesNameTheKey) {
   e = errorOf(kBox,
               {R"(fluid.patches=[{"type":"outlet","face":"xlo","min":[0,0,0],"max":[1,1]}])"});
   EXPECT_NE(e.find("fluid.patches[0].min"), std::string::npos) << e;
-  e = errorOf(kBox, {R"(fluid.patches=[{"type":"outlet","face":"ylo","min":[0.5,0],"max":[0.2,1]}])"});
+  e = errorOf(kBox,
+              {R"(fluid.patches=[{"type":"outlet","face":"ylo","min":[0.5,0],"max":[0.2,1]}])"});
   EXPECT_NE(e.find("fluid.patches[0].max"), std::string::npos) << e;
   // A wall patch that moves normally to its face.
   e = errorOf(kBox, {R"(fluid.patches=[{"type":"wall","face":"ylo","min":[0,0],"max":[1,1],

@@ -109,8 +109,8 @@ enum class Traffic : std::uint8_t {
   Auto = Count
 };
 inline constexpr std::array<std::string_view, 7> kTrafficNames = {
-    "fluid_halo", "coupling_halo", "dem_ghost", "dem_migrate",
-    "deposit_sum", "proxy", "force_handover"};
+    "fluid_halo",  "coupling_halo", "dem_ghost",     "dem_migrate",
+    "deposit_sum", "proxy",         "force_handover"};
 
 double threadCpuSeconds();
 

@@ -32,8 +32,8 @@
 //                Same physics, same answers to round-off.
 //
 // Co-location makes the kernels read the fluid's arrays and the particle arrays of the same rank
-// directly: the deposition and interpolation are coupling arithmetic (docs/architecture.md), and the
-// only data that moves between the two physics is the reverse halo sum of the deposited fields
+// directly: the deposition and interpolation are coupling arithmetic (docs/architecture.md), and
+// the only data that moves between the two physics is the reverse halo sum of the deposited fields
 // across block faces (remote) and the hand-over of the forces to the DEM (local).
 //
 // Drag is semi-implicit in the fluid (Xiao & Sun 2011): the fluid's drag term is

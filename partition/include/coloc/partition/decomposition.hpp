@@ -1,6 +1,6 @@
 // coloc/partition/decomposition.hpp — the one Cartesian block decomposition that the fluid and
-// the particles share (docs/architecture.md). Rank r owns the CFD cells of its block and the DEM bins
-// that cover the same region, so co-location holds by construction.
+// the particles share (docs/architecture.md). Rank r owns the CFD cells of its block and the DEM
+// bins that cover the same region, so co-location holds by construction.
 //
 // Blocks are defined by cuts along each axis: block c along axis d owns global cells
 // [cuts[d][c], cuts[d][c+1]). The uniform strategy splits N cells over P ranks as evenly as
@@ -48,8 +48,7 @@ class Decomposition {
   /// then leaves every block at least `minCells` cells along every axis; otherwise the legal
   /// factorisation with the smallest block surface. No MPI communication (callable for any
   /// rank count). Throws ConfigError naming partition.dims and domain.cells when none is legal.
-  static Int3 chooseDims(int size, const GlobalGrid& grid, Int3 dims = {0, 0, 0},
-                         int minCells = 1);
+  static Int3 chooseDims(int size, const GlobalGrid& grid, Int3 dims = {0, 0, 0}, int minCells = 1);
   /// The even split of n cells over p blocks.
   static std::vector<int> evenCuts(int n, int p);
 
