@@ -54,4 +54,9 @@ ParticleProbe probeParticles(const Config& cfg, const Decomposition& dec);
 std::vector<double> probeCellCostsOnRoot(const Config& cfg, const Decomposition& dec,
                                          const CostModel& model);
 
+/// The blocks partition.strategy asks for on `world` (coupling/src/choose_layouts.cpp): uniform
+/// blocks, or the balanced / independent cuts from the cost probe, the weights measured first
+/// by a short run on the uniform blocks when partition.calibrate_steps > 0. Collective.
+Layouts chooseLayouts(const Comm& world, const Config& cfg);
+
 }  // namespace coloc::coupling

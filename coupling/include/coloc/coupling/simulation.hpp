@@ -101,7 +101,9 @@ class Simulation {
   /// The blocks partition.strategy asks for: the particles from the cost probe (layouts.hpp, no
   /// solver); with partition.calibrate_steps a short run on the uniform blocks measures the
   /// weights.
-  static Layouts chooseLayouts(const Comm& world, const Config& cfg);
+  static Layouts chooseLayouts(const Comm& world, const Config& cfg) {
+    return coupling::chooseLayouts(world, cfg);
+  }
   ~Simulation();
 
   /// One coupling step (what it advances depends on run.mode).
