@@ -174,6 +174,25 @@ void DemSolver::Impl::migrate() {
   comm.raiseIfAny(err);
 }
 
+PlanTraffic DemSolver::Impl::forwardGhostRows(int d, unsigned op, std::size_t W) {
+  // Both faces' rows of axis d (operation op, periodic shift applied) packed in place into the
+  // axis's plan buffer, then sent; what arrives lands in ghosts.rbuf.
+  const auto& sw = ghosts.swaps[d];
+  const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+  auto& plan = ghosts.plan[static_cast<std::size_t>(d)];
+  const std::span<double> out = plan.packBuffer(static_cast<int>(W));
+  for (int s = 0; s < 2; ++s) {
+    if (to[s] == MPI_PROC_NULL) continue;
+    double shift[3] = {0, 0, 0};
+    shift[d] = sw[static_cast<std::size_t>(s)].shift;
+    const int at = faceOffset(plan, to, s, static_cast<int>(sw[0].send.size()));
+    detail::packRows(p, op, sw[static_cast<std::size_t>(s)].send, shift,
+                     out.data() + static_cast<std::size_t>(at) * W);
+  }
+  ghosts.rbuf.resize(plan.importCount() * W);
+  return plan.forwardPacked(static_cast<int>(W), ghosts.rbuf);
+}
+
 void DemSolver::Impl::buildGhosts() {
   const Int3 coords = dec.coords(), dims = dec.dims();
   const std::size_t W = detail::rowWidth(p, kOpGhostBuild);
@@ -208,17 +227,7 @@ void DemSolver::Impl::buildGhosts() {
     const double t0 = comm.wtime();
     auto& plan = ghosts.plan[static_cast<std::size_t>(d)];
     plan.rebuild(comm, ghosts.rank, ghosts.index, std::span<const int>(nb, nn));
-    const std::span<double> out = plan.packBuffer(static_cast<int>(W));
-    for (int s = 0; s < 2; ++s) {
-      if (to[s] == MPI_PROC_NULL) continue;
-      double shift[3] = {0, 0, 0};
-      shift[d] = sw[static_cast<std::size_t>(s)].shift;
-      const int at = faceOffset(plan, to, s, static_cast<int>(sw[0].send.size()));
-      detail::packRows(p, kOpGhostBuild, sw[static_cast<std::size_t>(s)].send, shift,
-                       out.data() + static_cast<std::size_t>(at) * W);
-    }
-    ghosts.rbuf.resize(plan.importCount() * W);
-    const PlanTraffic t = plan.forwardPacked(static_cast<int>(W), ghosts.rbuf);
+    const PlanTraffic t = forwardGhostRows(d, kOpGhostBuild, W);
     book(timers, t, nn - (nb[0] == dec.rank() ? 1 : 0), comm.wtime() - t0, Traffic::DemGhost);
     auto& seg = ghosts.seg[static_cast<std::size_t>(d)];
     const std::size_t start = p.size(), cnt = plan.importCount();
@@ -239,21 +248,8 @@ void DemSolver::Impl::updateGhosts() {
   const std::size_t W = detail::rowWidth(p, kOpGhostUpdate);
   for (int d = 0; d < 3; ++d) {
     if (ghosts.nSeg[static_cast<std::size_t>(d)] == 0) continue;
-    const auto& sw = ghosts.swaps[d];
-    const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
     const double t0 = comm.wtime();
-    auto& plan = ghosts.plan[static_cast<std::size_t>(d)];
-    const std::span<double> out = plan.packBuffer(static_cast<int>(W));
-    for (int s = 0; s < 2; ++s) {
-      if (to[s] == MPI_PROC_NULL) continue;
-      double shift[3] = {0, 0, 0};
-      shift[d] = sw[static_cast<std::size_t>(s)].shift;
-      const int at = faceOffset(plan, to, s, static_cast<int>(sw[0].send.size()));
-      detail::packRows(p, kOpGhostUpdate, sw[static_cast<std::size_t>(s)].send, shift,
-                       out.data() + static_cast<std::size_t>(at) * W);
-    }
-    ghosts.rbuf.resize(plan.importCount() * W);
-    const PlanTraffic t = plan.forwardPacked(static_cast<int>(W), ghosts.rbuf);
+    const PlanTraffic t = forwardGhostRows(d, kOpGhostUpdate, W);
     book(timers, t, 0, comm.wtime() - t0, Traffic::DemGhost);
     for (int g = 0; g < ghosts.nSeg[static_cast<std::size_t>(d)]; ++g) {
       const auto& sg = ghosts.seg[static_cast<std::size_t>(d)][static_cast<std::size_t>(g)];

@@ -147,6 +147,7 @@ struct DemSolver::Impl {
   void migrate();
   void buildGhosts();
   void updateGhosts();
+  PlanTraffic forwardGhostRows(int d, unsigned op, std::size_t W);
   // bins.cpp, neighbors.cpp
   void sortByBin();
   void buildLists();
