@@ -449,6 +449,9 @@ int runCase(const Comm& world, const RunOptions& opts) {
                                           "writing the checkpoint", "re-balancing"};
   // The keys the loop needs, parsed once (no string look-ups inside the loop).
   const long long rebalanceEvery = coupling::rebalanceInterval(cfg);
+  const bool rebalanceThroughFile = cfg.string("partition.rebalance_move") == "file";
+  const std::string rebalanceScratch =
+      (std::filesystem::path(outDir) / "rebalance.tmp.h5").string();
   const long long runSteps = cfg.integer("run.steps");
   const double runEndTime = cfg.number("run.end_time");
   simulation->beginRun();
@@ -475,7 +478,11 @@ int runCase(const Comm& world, const RunOptions& opts) {
             where = kRebalance;
             const auto plan = coupling::planRebalance(*simulation, cfg);
             if (plan.layouts) {
-              simulation = coupling::applyRebalance(std::move(simulation), cfg, *plan.layouts);
+              simulation =
+                  rebalanceThroughFile
+                      ? coupling::applyRebalanceThroughFile(std::move(simulation), cfg,
+                                                            *plan.layouts, rebalanceScratch)
+                      : coupling::applyRebalance(std::move(simulation), cfg, *plan.layouts);
               output->rebind(simulation->decomposition());
               ++rebalances;
               if (root && !opts.quiet) {

@@ -43,7 +43,89 @@ std::vector<double> toRanks(CommPlan& plan, const Comm& comm, std::span<const in
   plan.forwardPacked(w, in);
   return in;
 }
-constexpr int kHistRec = 5;  // holder, partner, shear3
+// A contact history as a row of doubles: holder (its id, or its place in a block of rows),
+// partner id, shear displacement. The one place the record is written and read.
+constexpr int kHistRec = 5;
+void historyRecord(double holder, const ContactHistory& c, double* o) {
+  o[0] = holder;
+  o[1] = static_cast<double>(c.partner);
+  std::copy(c.shear.begin(), c.shear.end(), o + 2);
+}
+std::int64_t historyHolder(const double* row) {
+  return static_cast<std::int64_t>(row[0]);
+}
+std::int64_t historyPartner(const double* row) {
+  return static_cast<std::int64_t>(row[1]);
+}
+const double* historyShear(const double* row) {
+  return row + 2;
+}
+
+/// The histories of a state read from a file (any rank may hold any history) to the ranks that
+/// now own their holders (the owned particles `p`), through a directory (rank holder % P) that
+/// learns every holder's owner and forwards. `mine` receives the rows, `row` each one's holder.
+void routeHistoriesById(const Comm& comm, const ParticleStore& p, DemState& st, CommPlan& plan,
+                        std::vector<double>& mine, std::vector<int>& row) {
+  const int P = comm.size();
+  const std::size_t n = p.nOwned;
+  std::string err;
+  std::vector<int> dest(st.contacts.size());
+  for (std::size_t h = 0; h < st.contacts.size(); ++h) {
+    const auto& c = st.contacts[h];
+    if (c.holder < 0) {
+      if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
+      dest[h] = 0;
+      continue;
+    }
+    dest[h] = static_cast<int>(c.holder % P);
+  }
+  comm.raiseIfAny(err);
+  const std::vector<double> held =
+      toRanks(plan, comm, dest, kHistRec, [&](std::size_t h, double* o) {
+        historyRecord(static_cast<double>(st.contacts[h].holder), st.contacts[h], o);
+      });
+  st = DemState{};  // the input is no longer needed
+  dest.resize(n);
+  for (std::size_t i = 0; i < n; ++i) dest[i] = static_cast<int>(p.id[i] % P);
+  // ids owned by each rank, rank after rank
+  const std::vector<double> reg = toRanks(
+      plan, comm, dest, 1, [&](std::size_t i, double* o) { o[0] = static_cast<double>(p.id[i]); });
+  std::vector<int> histAt;  // rows of `held` kept, in order
+  {
+    std::vector<std::pair<std::int64_t, int>> owner;  // (id, owner rank)
+    std::size_t k = 0;
+    for (int r = 0; r < P; ++r)
+      for (int c = 0; c < plan.importsFrom(r); ++c, ++k)
+        owner.emplace_back(static_cast<std::int64_t>(reg[k]), r);
+    std::sort(owner.begin(), owner.end());
+    dest.clear();
+    for (std::size_t h = 0; h + kHistRec <= held.size(); h += kHistRec) {
+      const auto id = historyHolder(&held[h]);
+      const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
+      if (it == owner.end() || it->first != id) {
+        if (err.empty())
+          err = "a restored contact history names holder " + std::to_string(id) +
+                ", which is not among the restored particles";
+        continue;
+      }
+      dest.push_back(it->second);
+      histAt.push_back(static_cast<int>(h));
+    }
+  }
+  comm.raiseIfAny(err);
+  mine = toRanks(plan, comm, dest, kHistRec, [&](std::size_t k, double* o) {
+    std::copy_n(held.data() + histAt[k], kHistRec, o);
+  });
+  // the holder's local row
+  std::vector<std::pair<std::int64_t, int>> byId(n);
+  for (std::size_t i = 0; i < n; ++i) byId[i] = {p.id[i], static_cast<int>(i)};
+  std::sort(byId.begin(), byId.end());
+  row.resize(mine.size() / kHistRec);
+  for (std::size_t h = 0; h < row.size(); ++h) {
+    const auto id = historyHolder(&mine[h * kHistRec]);
+    row[h] = std::lower_bound(byId.begin(), byId.end(), std::make_pair(id, -1))->second;
+  }
+}
 }  // namespace
 
 DemFlow DemSolver::Impl::globalFlow() const {
@@ -102,15 +184,22 @@ void DemSolver::Impl::restore(DemState& st) {
         "the restored state's extra particle fields differ between the ranks or from the solver's";
   comm.raiseIfAny(err);
   std::vector<int> dest(q.nOwned);
-  for (std::size_t i = 0; i < q.nOwned; ++i) {
-    const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
-    dest[i] = ownerRank(xi);
+  std::vector<int> place(q.nOwned);  // row i's place among the rows sent to dest[i]
+  {
+    std::vector<int> sent(static_cast<std::size_t>(P), 0);
+    for (std::size_t i = 0; i < q.nOwned; ++i) {
+      const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
+      dest[i] = ownerRank(xi);
+      place[i] = sent[static_cast<std::size_t>(dest[i])]++;
+    }
   }
   CommPlan plan;
   std::vector<double> in =
       toRanks(plan, comm, dest, static_cast<int>(W),
               [&](std::size_t i, double* o) { detail::packRow(q, kOpState, i, nullptr, o); });
   const std::size_t n = W > 0 ? in.size() / W : 0;
+  std::vector<int> firstRowFrom(static_cast<std::size_t>(P));  // arrived rows, rank by rank
+  for (int r = 0; r < P; ++r) firstRowFrom[static_cast<std::size_t>(r)] = plan.importOffset(r);
   detail::resizeAll(p, n);
   p.nOwned = n;
   p.nGhost = 0;
@@ -120,80 +209,45 @@ void DemSolver::Impl::restore(DemState& st) {
       err = "restored particle " + std::to_string(p.id[i]) + " has material " +
             std::to_string(p.material[i]) + " (" + std::to_string(nMat) + " declared)";
   comm.raiseIfAny(err);
-  // 2. histories to their holders through a directory (rank holder % P): the directory learns
-  //    every holder's owner, then forwards; a history may sit on any rank, apart from its holder
-  dest.resize(st.contacts.size());
-  for (std::size_t h = 0; h < st.contacts.size(); ++h) {
-    const auto& c = st.contacts[h];
-    if (c.holder < 0) {
-      if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
-      dest[h] = 0;
-      continue;
-    }
-    dest[h] = static_cast<int>(c.holder % P);
-  }
-  comm.raiseIfAny(err);
-  const auto histRow = [](const ContactHistory& c, double* o) {
-    o[0] = static_cast<double>(c.holder);
-    o[1] = static_cast<double>(c.partner);
-    std::copy(c.shear.begin(), c.shear.end(), o + 2);
-  };
-  const std::vector<double> held = toRanks(
-      plan, comm, dest, kHistRec, [&](std::size_t h, double* o) { histRow(st.contacts[h], o); });
-  st = DemState{};  // the input is no longer needed
-  dest.resize(n);
-  for (std::size_t i = 0; i < n; ++i) dest[i] = static_cast<int>(p.id[i] % P);
-  // ids owned by each rank, rank after rank
-  const std::vector<double> reg = toRanks(
-      plan, comm, dest, 1, [&](std::size_t i, double* o) { o[0] = static_cast<double>(p.id[i]); });
-  std::vector<int> histAt;  // rows of `held` kept, in order
-  {
-    std::vector<std::pair<std::int64_t, int>> owner;  // (id, owner rank)
+  // 2. every history to the rank of its holder; `row` = the holder's local row
+  std::vector<double> mine;
+  std::vector<int> row;
+  const bool withRows = st.contactRow.size() == st.contacts.size() &&
+                        std::all_of(st.contactRow.begin(), st.contactRow.end(), [&](int a) {
+                          return a >= 0 && static_cast<std::size_t>(a) < q.nOwned;
+                        });
+  if (comm.min(withRows ? 1LL : 0LL) == 1) {
+    // in memory: each history goes where its holder went, carrying the holder's place there
+    std::vector<int> to(st.contacts.size());
+    for (std::size_t h = 0; h < st.contacts.size(); ++h)
+      to[h] = dest[static_cast<std::size_t>(st.contactRow[h])];
+    mine = toRanks(plan, comm, to, kHistRec, [&](std::size_t h, double* o) {
+      const auto a = static_cast<std::size_t>(st.contactRow[h]);
+      historyRecord(static_cast<double>(place[a]), st.contacts[h], o);
+    });
+    row.resize(mine.size() / kHistRec);
     std::size_t k = 0;
     for (int r = 0; r < P; ++r)
       for (int c = 0; c < plan.importsFrom(r); ++c, ++k)
-        owner.emplace_back(static_cast<std::int64_t>(reg[k]), r);
-    std::sort(owner.begin(), owner.end());
-    dest.clear();
-    for (std::size_t h = 0; h + kHistRec <= held.size(); h += kHistRec) {
-      const auto id = static_cast<std::int64_t>(held[h]);
-      const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
-      if (it == owner.end() || it->first != id) {
-        if (err.empty())
-          err = "a restored contact history names holder " + std::to_string(id) +
-                ", which is not among the restored particles";
-        continue;
-      }
-      dest.push_back(it->second);
-      histAt.push_back(static_cast<int>(h));
-    }
+        row[k] = firstRowFrom[static_cast<std::size_t>(r)] +
+                 static_cast<int>(historyHolder(&mine[k * kHistRec]));
+    st = DemState{};
+  } else {
+    routeHistoriesById(comm, p, st, plan, mine, row);
   }
-  comm.raiseIfAny(err);
-  const std::vector<double> mine =
-      toRanks(plan, comm, dest, kHistRec,
-              [&](std::size_t k, double* o) { std::copy_n(held.data() + histAt[k], kHistRec, o); });
+  const std::size_t nh = row.size();
   // 3. history rows per local particle (the format migration and the list build use)
-  std::vector<std::pair<std::int64_t, int>> byId(n);
-  for (std::size_t i = 0; i < n; ++i) byId[i] = {p.id[i], static_cast<int>(i)};
-  std::sort(byId.begin(), byId.end());
-  const std::size_t nh = mine.size() / kHistRec;
-  std::vector<int> row(nh);
   hist.hStart.assign(n + 1, 0);
-  for (std::size_t h = 0; h < nh; ++h) {
-    const auto id = static_cast<std::int64_t>(mine[h * kHistRec]);
-    const auto it = std::lower_bound(byId.begin(), byId.end(), std::make_pair(id, -1));
-    row[h] = it->second;
-    ++hist.hStart[static_cast<std::size_t>(row[h]) + 1];
-  }
+  for (std::size_t h = 0; h < nh; ++h) ++hist.hStart[static_cast<std::size_t>(row[h]) + 1];
   for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
   hist.hId.assign(nh, 0);
   hist.hS.assign(3 * nh, 0.0);
   iscr.assign(hist.hStart.begin(), hist.hStart.end() - 1);
   for (std::size_t h = 0; h < nh; ++h) {
     const auto e = static_cast<std::size_t>(iscr[static_cast<std::size_t>(row[h])]++);
-    hist.hId[e] = static_cast<std::int64_t>(mine[h * kHistRec + 1]);
-    for (int k = 0; k < 3; ++k)
-      hist.hS[3 * e + static_cast<std::size_t>(k)] = mine[h * kHistRec + 2 + k];
+    const double* rec = &mine[h * kHistRec];
+    hist.hId[e] = historyPartner(rec);
+    std::copy_n(historyShear(rec), 3, &hist.hS[3 * e]);
   }
   // 4. the canonical rebuild (same orders as the one inside saveState), no force recomputation:
   //    the saved forces start the next velocity-Verlet half step; the force pass below only
@@ -242,6 +296,7 @@ DemState DemSolver::Impl::save() {
         c.partner = j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
         c.shear = {sh[0], sh[1], sh[2]};
         st.contacts.push_back(c);
+        st.contactRow.push_back(static_cast<int>(a));
       }
       if (j >= 0 && static_cast<std::size_t>(j) < n) {
         ContactHistory c;
@@ -249,6 +304,7 @@ DemState DemSolver::Impl::save() {
         c.partner = p.id[a];
         c.shear = {-sh[0], -sh[1], -sh[2]};
         st.contacts.push_back(c);
+        st.contactRow.push_back(j);
       }
     }
   }

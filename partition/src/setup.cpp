@@ -32,6 +32,11 @@ void declareDomainConfig(Schema& s) {
   s.number("partition.rebalance_threshold", 1.05,
            "balanced: re-balance only when the modelled largest block cost drops by this factor",
            Range::atLeast(1.0));
+  s.string("partition.rebalance_move", "memory",
+           "how a re-balance moves the run: memory (fields remapped and particles sent to their "
+           "new owners) or file (the former path through a scratch restart checkpoint "
+           "rebalance.tmp.h5 in the output folder; kept to time the two side by side)",
+           {"memory", "file"});
   s.intVec3("partition.dem_dims", std::array<long long, 3>{0, 0, 0},
             "independent: the DEM's process grid (0: balanced by particle count on a grid other "
             "than the fluid's)",

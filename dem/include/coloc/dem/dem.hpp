@@ -98,6 +98,10 @@ struct DemFlow {
 struct DemState {
   ParticleStore particles;
   std::vector<ContactHistory> contacts;  // every history held by an owned particle
+  /// In memory only: the row in `particles` of each contact's holder (saveState fills it). A
+  /// state with it moves each history along with its holder in one exchange; without it (read
+  /// from a file, or edited) the histories find their holders through a directory by id.
+  std::vector<int> contactRow;
   double time = 0;
   long long steps = 0, rebuilds = 0;
   DemFlow flow;  // the same on every rank
