@@ -91,37 +91,16 @@ Hid parentsLcpl() {
   return l;
 }
 
-hid_t memType(Elem e) {
+ElemTypes elemTypes(Elem e) {
   switch (e) {
-    case Elem::F64:
-      return H5T_NATIVE_DOUBLE;
     case Elem::I64:
-      return H5T_NATIVE_INT64;
+      return {H5T_NATIVE_INT64, H5T_STD_I64LE, "integer"};
     case Elem::I32:
-      return H5T_NATIVE_INT32;
-  }
-  return H5T_NATIVE_DOUBLE;
-}
-hid_t fileType(Elem e) {
-  switch (e) {
+      return {H5T_NATIVE_INT32, H5T_STD_I32LE, "integer"};
     case Elem::F64:
-      return H5T_IEEE_F64LE;
-    case Elem::I64:
-      return H5T_STD_I64LE;
-    case Elem::I32:
-      return H5T_STD_I32LE;
+      break;
   }
-  return H5T_IEEE_F64LE;
-}
-const char* elemName(Elem e) {
-  switch (e) {
-    case Elem::F64:
-      return "float";
-    case Elem::I64:
-    case Elem::I32:
-      return "integer";
-  }
-  return "?";
+  return {H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, "float"};
 }
 
 namespace {
@@ -205,10 +184,10 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
       checkErr(H5Pset_fletcher32(dcpl), "H5Pset_fletcher32");
     }
     Hid lcpl = parentsLcpl();
-    dset = Hid(
-        checkId(H5Dcreate2(file.id(), path.c_str(), fileType(e), fspace, lcpl, dcpl, H5P_DEFAULT),
-                "H5Dcreate2"),
-        H5Dclose);
+    dset = Hid(checkId(H5Dcreate2(file.id(), path.c_str(), elemTypes(e).file, fspace, lcpl, dcpl,
+                                  H5P_DEFAULT),
+                       "H5Dcreate2"),
+               H5Dclose);
     mspace = selectSlab(fspace, s);
     xfer = collectiveXfer();
   });
@@ -216,7 +195,8 @@ void writeSlab(H5File& file, const std::string& path, Elem e, const Slab& s, con
   if (s.globalElements() == 0) return;
   static const double dummy = 0;
   ioCollective(comm, ctx, [&] {
-    checkErr(H5Dwrite(dset, memType(e), mspace, fspace, xfer, buf ? buf : &dummy), "H5Dwrite");
+    checkErr(H5Dwrite(dset, elemTypes(e).mem, mspace, fspace, xfer, buf ? buf : &dummy),
+             "H5Dwrite");
   });
 }
 
@@ -237,7 +217,7 @@ void readSlab(H5File& file, const std::string& path, Elem e, const Slab& s, void
     const H5T_class_t cls = H5Tget_class(type);
     const bool wantFloat = e == Elem::F64;
     if ((wantFloat && cls != H5T_FLOAT) || (!wantFloat && cls != H5T_INTEGER))
-      throw LocalFailure(std::string("expected ") + elemName(e) + " data");
+      throw LocalFailure(std::string("expected ") + elemTypes(e).name + " data");
     fspace = Hid(checkId(H5Dget_space(dset), "H5Dget_space"), H5Sclose);
     const int rank = H5Sget_simple_extent_ndims(fspace);
     std::array<hsize_t, 8> dims{};
@@ -255,7 +235,7 @@ void readSlab(H5File& file, const std::string& path, Elem e, const Slab& s, void
   if (s.globalElements() == 0) return;
   static double dummy = 0;
   collective(comm, ctx, [&] {
-    checkErr(H5Dread(dset, memType(e), mspace, fspace, xfer, buf ? buf : &dummy), "H5Dread");
+    checkErr(H5Dread(dset, elemTypes(e).mem, mspace, fspace, xfer, buf ? buf : &dummy), "H5Dread");
   });
 }
 }  // namespace coloc::h5

@@ -119,9 +119,13 @@ constexpr Elem elemOf() {
     return Elem::I32;
   }
 }
-hid_t memType(Elem e);
-hid_t fileType(Elem e);
-const char* elemName(Elem e);
+/// The HDF5 types of an element kind: in memory (native), in the file (little-endian), and its
+/// name in messages.
+struct ElemTypes {
+  hid_t mem, file;
+  const char* name;
+};
+ElemTypes elemTypes(Elem e);
 
 // ---- one rank's slab of a global array ----------------------------------------------------------
 
