@@ -32,18 +32,18 @@ double threadCpuSeconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-void BM_PressureSolve(benchmark::State& state) {
-  const int n = static_cast<int>(state.range(0));
-  const auto kind =
-      state.range(1) == 0 ? fv::PressureSolver::Kind::Pfmg : fv::PressureSolver::Kind::Smg;
+/// The pressure equation on an nx x ny x nz box of unit spacing-scaled cells (see the header).
+void solvePressure(benchmark::State& state, Int3 n, long long kindArg) {
+  const auto kind = kindArg == 0 ? fv::PressureSolver::Kind::Pfmg : fv::PressureSolver::Kind::Smg;
   GlobalGrid g;
-  g.cells = {n, n, n};
+  g.cells = n;
+  g.length = {1.0, static_cast<double>(n[1]) / n[0], static_cast<double>(n[2]) / n[0]};
   const auto dec = Decomposition::uniform(Comm::world(), g);
   fv::PressureSolver ps(dec, kind, 1e-6, 200);
   const Int3 c = dec.cells();
   const std::size_t cells = static_cast<std::size_t>(dec.ownedCellCount());
   std::vector<double> A(7 * cells), b(cells), x(cells, 0.0);
-  const double h = 1.0 / n, w = 1.0 / (h * h);
+  const double h = 1.0 / n[0], w = 1.0 / (h * h);
   std::size_t r = 0;
   for (int k = 0; k < c[2]; ++k)
     for (int j = 0; j < c[1]; ++j)
@@ -52,13 +52,13 @@ void BM_PressureSolve(benchmark::State& state) {
         double diag = 0;
         for (int a = 0; a < 3; ++a)
           for (int s = 0; s < 2; ++s) {
-            const bool wall = s == 0 ? gi[a] == 0 : gi[a] == n - 1;
+            const bool wall = s == 0 ? gi[a] == 0 : gi[a] == n[a] - 1;
             A[7 * r + 1 + 2 * a + s] = wall ? 0.0 : -w;
             diag += wall ? 2 * w : w;  // Dirichlet at the face, half a cell away
           }
         A[7 * r] = diag;
-        b[r] = std::sin(M_PI * (gi[0] + 0.5) * h) * std::sin(M_PI * (gi[1] + 0.5) * h) *
-               std::sin(M_PI * (gi[2] + 0.5) * h);
+        b[r] = std::sin(M_PI * (gi[0] + 0.5) / n[0]) * std::sin(M_PI * (gi[1] + 0.5) / n[1]) *
+               std::sin(M_PI * (gi[2] + 0.5) / n[2]);
       }
   const double t0 = MPI_Wtime(), c0 = threadCpuSeconds();
   ps.setMatrix(A);
@@ -78,6 +78,27 @@ void BM_PressureSolve(benchmark::State& state) {
   state.counters["setup_s"] = setup;
   state.counters["setup_cpu_s"] = setupCpu;  // busy: bench/scripts/model.py on a loaded machine
   state.counters["rel_residual"] = ps.lastRelativeResidual();
+  // the block faces shared with other ranks (cells, largest rank): hypre's per-rank overhead
+  // grows with them (bench/scripts/model.py)
+  double face = 0;
+  for (int a = 0; a < 3; ++a) {
+    const int sides = (dec.neighbor(a, -1) >= 0) + (dec.neighbor(a, +1) >= 0);
+    face += sides * static_cast<double>(c[(a + 1) % 3]) * c[(a + 2) % 3];
+  }
+  state.counters["face_cells"] = dec.comm().max(face);
+}
+
+void BM_PressureSolve(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  solvePressure(state, {n, n, n}, state.range(1));
+}
+
+/// BM_PressureSolveBox/nx/ny/nz/kind: the same on a box (the benchmark cases' grids).
+void BM_PressureSolveBox(benchmark::State& state) {
+  solvePressure(state,
+                {static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+                 static_cast<int>(state.range(2))},
+                state.range(3));
 }
 
 void BM_FluidChannelStep(benchmark::State& state) {
@@ -129,6 +150,13 @@ BENCHMARK(BM_PressureSolve)
     ->Args({64, 0})
     ->Args({128, 0})
     ->Args({64, 1})
+    ->Iterations(3)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PressureSolveBox)
+    ->Args({72, 6, 72, 0})     // case3-small
+    ->Args({110, 22, 22, 0})   // case2-small
+    ->Args({240, 20, 240, 0})  // case 3
     ->Iterations(3)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

@@ -13,7 +13,8 @@ Unit costs (seconds from a 1-rank run of the same physics; wall, or thread-CPU w
                  coefficients change, hypre's PCG+PFMG set-up; report.pressure.setups counts them);
   pressure solve per cell and PCG iteration, x the iterations per step of the 1-rank run;
   hypre's overhead per PFMG level and face neighbour (per iteration, per set-up) that 1 rank
-                 cannot show: bench_fv BM_PressureSolve at 1 and 2 ranks (--pfmg1, --pfmg2);
+                 cannot show: bench_fv BM_PressureSolveBox on the case's grid (else
+                 BM_PressureSolve on cubes) at 1 and 2 ranks (--pfmg1, --pfmg2);
   DEM            per particle and sub-step (contacts folded in);
   coupling       per particle-step on the rank's coupled particles (own, or proxies).
 Memory term (bench_stream, --stream): B(k) = the triad bandwidth ONE rank gets while k ranks of a
@@ -106,18 +107,24 @@ def stream_memory(stream):
 
 
 def bench_points(bench, busy):
-    """BM_PressureSolve/n/0 (bench_fv, --benchmark_format=json): {n: (seconds per PCG iteration,
-    set-up seconds, ranks)}; thread-CPU times with busy; the fastest of --benchmark_repetitions."""
+    """BM_PressureSolve/n/0 and BM_PressureSolveBox/nx/ny/nz/0 (bench_fv,
+    --benchmark_format=json): {(nx, ny, nz): (seconds per PCG iteration, set-up seconds, ranks)};
+    thread-CPU times with busy; the fastest of --benchmark_repetitions."""
     pts = {}
     for b in bench.get("benchmarks", []):
         parts = b["name"].split("/")
-        if parts[0] != "BM_PressureSolve" or parts[2] != "0" or b.get("run_type") == "aggregate":
+        if b.get("run_type") == "aggregate":
+            continue
+        if parts[0] == "BM_PressureSolve" and parts[2] == "0":
+            n = (int(parts[1]),) * 3
+        elif parts[0] == "BM_PressureSolveBox" and parts[4] == "0":
+            n = tuple(int(x) for x in parts[1:4])
+        else:
             continue
         unit = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[b.get("time_unit", "ns")]
         t = b["cpu_time" if busy else "real_time"] * unit
         its = max(b["iterations"], 1)  # the PCG counter: written after Google Benchmark's own
         setup = b.get("setup_cpu_s", b["setup_s"]) if busy else b["setup_s"]
-        n = int(parts[1])
         if n in pts:  # repetitions: the least disturbed of each
             t0, s0, _ = pts[n]
             pts[n] = (min(t0, t / its), min(s0, setup), int(b["ranks"]))
@@ -126,32 +133,45 @@ def bench_points(bench, busy):
     return pts
 
 
-def solver_overhead(costs, one, two, busy, latency):
+def grid_levels(dims):
+    """PFMG levels of a global grid: 1 + sum_d ceil(log2 n_d) (one axis coarsened a level)."""
+    return 1 + sum(math.ceil(math.log2(n)) for n in dims if n > 1)
+
+
+def solver_overhead(costs, one, two, busy, latency, grid=None):
     """hypre's cost per PFMG level and face neighbour that a 1-rank run cannot show (comm
     packages, packing, the coarse levels' halos), per PCG iteration and per set-up: from
-    bench_fv BM_PressureSolve on an n^3 cube at 1 and 2 ranks (2 x 1 x 1: one neighbour),
+    bench_fv's pressure solve at 1 and 2 ranks (2 x 1 x 1: one neighbour),
     o = (t(2 ranks) - f t(1 rank) / 2) / levels, f the memory contention of the phase at 2 ranks,
-    less the message latencies the network model adds itself."""
+    less the message latencies the network model adds itself. With a point on the case's own
+    grid (BM_PressureSolveBox), that point alone (hypre's overhead depends on the block's shape:
+    the coarse levels of a thin block are few cells); otherwise the mean over the cubes."""
     p1, p2 = bench_points(one, busy), bench_points(two, busy)
     c2 = costs.get("memory_calibration", {}).get("contention_2", 1.0)
     ms = costs["memory_share"]
     f_it = 1 + ms["pressure_solve"] * (c2 - 1)
     f_su = 1 + ms["pressure_setup"] * (c2 - 1)
+    both = [n for n in sorted(set(p1) & set(p2)) if p1[n][2] == 1 and p2[n][2] == 2]
+    own = tuple(grid) if grid is not None else None
+    if own in both:
+        both = [own]
+    else:
+        both = [n for n in both if n[0] == n[1] == n[2]]
     o_it, o_su, used = [], [], []
-    for n in sorted(set(p1) & set(p2)):
-        if p1[n][2] != 1 or p2[n][2] != 2:
-            continue
-        levels = 1 + 3 * math.ceil(math.log2(n))
+    for n in both:
+        levels = grid_levels(n)
         o_it.append(max(0.0, p2[n][0] - f_it * p1[n][0] / 2) / levels
                     - (EXCH_PER_LEVEL + 1) * latency - ALLREDUCES_PER_ITER * latency / levels)
         o_su.append(max(0.0, p2[n][1] - f_su * p1[n][1] / 2) / levels
                     - EXCH_PER_SETUP_LEVEL * latency)
-        used.append([n, p1[n][0], p2[n][0], p1[n][1], p2[n][1]])
+        used.append([list(n), p1[n][0], p2[n][0], p1[n][1], p2[n][1]])
     if not used:
         return None
     return {"per_level_neighbour_iteration_s": max(0.0, sum(o_it) / len(o_it)),
             "per_level_neighbour_setup_s": max(0.0, sum(o_su) / len(o_su)),
-            "points_n_iter1_iter2_setup1_setup2": used}
+            "from": "the case's own grid" if own is not None and [list(own)] == [u[0] for u in used]
+            else "cubes",
+            "points_grid_iter1_iter2_setup1_setup2": used}
 
 
 def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None, latency=0.0):
@@ -196,7 +216,8 @@ def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None
         costs["memory_calibration"] = {"contention_2": c2, "slowdown_with_corunner": slow,
                                        "stream_loadavg": stream.get("loadavg", "")}
     if pfmg1 is not None and pfmg2 is not None:
-        o = solver_overhead(costs, pfmg1, pfmg2, key != "avg", latency)
+        o = solver_overhead(costs, pfmg1, pfmg2, key != "avg", latency,
+                            report["config"]["domain"]["cells"])
         if o:
             costs["pressure_overhead"] = o
     return costs
@@ -229,8 +250,7 @@ def neighbours(dims, r):
 
 
 def pfmg_levels(layout):
-    dims = [cuts[-1] for cuts in layout["fluid_cuts"]]
-    return 1 + sum(math.ceil(math.log2(n)) for n in dims if n > 1)
+    return grid_levels([cuts[-1] for cuts in layout["fluid_cuts"]])
 
 
 def predict_layout(costs, layout, prof):

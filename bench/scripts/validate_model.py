@@ -6,6 +6,7 @@ For each case (default case2-small and case3-small) it runs, --repeats times eac
   np1corun   the same beside one `bench_stream --co-run`      (memory-bound shares)
   np2        mpirun -n 2 coloc run CASE                      (the point to predict)
 and once: bench_stream on every core (memory contention), bench_fv BM_PressureSolve/{32,64}/0
+and BM_PressureSolveBox on the small cases' grids
 on 1 and 2 ranks (hypre's per-level overhead), `coloc plan CASE --ranks 1,2`. It takes the
 fastest run of each set (the least disturbed; --pick median), calibrates from the 1-rank runs
 ONLY (the 2-rank runs are never fitted), predicts 1 and 2 ranks (--ranks: more) with the
@@ -72,7 +73,7 @@ def run_all(a, runs):
     if os.path.exists(fv):
         for n in (1, 2):
             print("measuring the pressure solve on %d rank(s) (bench_fv) ..." % n, flush=True)
-            sh(mpirun(n) + [fv, "--benchmark_filter=BM_PressureSolve/(32|64)/0/",
+            sh(mpirun(n) + [fv, "--benchmark_filter=BM_PressureSolve(/(32|64)/0/|Box/(72/6/72|110/22/22)/0/)",
                             "--benchmark_format=json", "--benchmark_repetitions=%d" % a.repeats,
                             "--benchmark_out=" + os.path.join(runs, "pfmg-np%d.json" % n)],
                os.path.join(runs, "pfmg-np%d.log" % n))
@@ -194,9 +195,10 @@ def validate_case(a, runs, case, out_dir):
                                 ", ".join("%s %.2f" % kv for kv in costs["memory_share"].items())))
     ov = costs["pressure_overhead"]
     lines.append("pressure: %.2f PCG iterations a step (1 rank), %.2f set-ups a step; hypre "
-                 "overhead per level and neighbour %.3g s an iteration, %.3g s a set-up"
+                 "overhead per level and neighbour %.3g s an iteration, %.3g s a set-up (from %s)"
                  % (costs["pressure_iterations_per_step"], costs["pressure_setups_per_step"],
-                    ov["per_level_neighbour_iteration_s"], ov["per_level_neighbour_setup_s"]))
+                    ov["per_level_neighbour_iteration_s"], ov["per_level_neighbour_setup_s"],
+                    ov.get("from", "none")))
     lines.append("%-6s %-14s %11s %11s %9s  %s" % ("ranks", "quantity", "model", "measured",
                                                   "error", "verdict"))
     ok_all = True
