@@ -163,17 +163,17 @@ CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const
 
 void writeFluidState(H5File& file, const std::string& group, const Decomposition& dec,
                      const fv::FluidSolver& fluid) {
-  const auto& f = fluid.fields();
   file.createGroup(group);
-  for (int d = 0; d < 3; ++d) {
-    writeFaceComponent(file, group + "/u_" + kAxis[d], dec, d, f.u[d]);
-    writeFaceComponent(file, group + "/H_" + kAxis[d], dec, d, fluid.history()[d]);
-  }
-  writeCellField(file, group + "/p", dec, f.p);
-  writeCellField(file, group + "/eps", dec, f.eps);
-  writeCellField(file, group + "/eps_old", dec, f.epsOld);
-  writeCellField(file, group + "/K", dec, f.K);
-  writeCellVector(file, group + "/KUp", dec, f.KUp[0], f.KUp[1], f.KUp[2]);
+  fv::forEachStateField(fluid,
+                        [&](const fv::FluidSolver::StateField& sf, const Field3<double>* const* a) {
+                          const std::string path = group + "/" + sf.name;
+                          if (sf.stagger >= 0)
+                            writeFaceComponent(file, path, dec, sf.stagger, *a[0]);
+                          else if (sf.components == 1)
+                            writeCellField(file, path, dec, *a[0]);
+                          else
+                            writeCellVector(file, path, dec, *a[0], *a[1], *a[2]);
+                        });
   const fv::FluidCounters c = fluid.counters();
   const std::pair<const char*, double> dbl[] = {{"time", c.time},
                                                 {"dt_old", c.dtOld},
@@ -197,40 +197,26 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
 
 void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
                     fv::FluidSolver& fluid) {
-  // fields() (non-const) marks the solver's ghosts and rates stale; restoreState sets them.
-  auto& f = fluid.fields();
-  for (int d = 0; d < 3; ++d) {
-    readFaceComponent(file, group + "/u_" + kAxis[d], dec, d, f.u[d]);
-    readFaceComponent(file, group + "/H_" + kAxis[d], dec, d, fluid.history()[d]);
-  }
-  readCellField(file, group + "/p", dec, f.p);
-  readCellField(file, group + "/eps", dec, f.eps);
-  readCellField(file, group + "/eps_old", dec, f.epsOld);
-  readCellField(file, group + "/K", dec, f.K);
-  readCellVector(file, group + "/KUp", dec, f.KUp[0], f.KUp[1], f.KUp[2]);
-  {
-    // A restart must not start from NaN or from an impossible fluid fraction.
-    std::string err;
-    auto finite = [&](const Field3<double>& x, const std::string& name, bool fraction = false) {
-      if (!err.empty()) return;
-      for (double v : x.data())
-        if (!std::isfinite(v) || (fraction && !(v > 0.0 && v <= 1.0))) {
-          err = group + "/" + name + ": value " + g9(v) +
-                (fraction ? " (a fluid fraction must lie in (0, 1])" : " (not finite)");
-          return;
-        }
-    };
-    for (int d = 0; d < 3; ++d) {
-      finite(f.u[d], std::string("u_") + kAxis[d]);
-      finite(std::as_const(fluid).history()[d], std::string("H_") + kAxis[d]);
-      finite(f.KUp[d], "KUp");
-    }
-    finite(f.p, "p");
-    finite(f.eps, "eps", true);
-    finite(f.epsOld, "eps_old", true);
-    finite(f.K, "K");
-    file.comm().raiseIfAny(err.empty() ? err : "checkpoint '" + file.path() + "': " + err);
-  }
+  // the table's non-const walk marks the solver's ghosts and rates stale; restoreState sets them
+  std::string err;  // a restart must not start from NaN or from an impossible fluid fraction
+  fv::forEachStateField(
+      fluid, [&](const fv::FluidSolver::StateField& sf, Field3<double>* const* a) {
+        const std::string path = group + "/" + sf.name;
+        if (sf.stagger >= 0)
+          readFaceComponent(file, path, dec, sf.stagger, *a[0]);
+        else if (sf.components == 1)
+          readCellField(file, path, dec, *a[0]);
+        else
+          readCellVector(file, path, dec, *a[0], *a[1], *a[2]);
+        for (int c = 0; c < sf.components && err.empty(); ++c)
+          for (double v : a[c]->data())
+            if (!std::isfinite(v) || (sf.fraction && !(v > 0.0 && v <= 1.0))) {
+              err = group + "/" + sf.name + ": value " + g9(v) +
+                    (sf.fraction ? " (a fluid fraction must lie in (0, 1])" : " (not finite)");
+              break;
+            }
+      });
+  file.comm().raiseIfAny(err.empty() ? err : "checkpoint '" + file.path() + "': " + err);
   fv::FluidCounters c;
   c.time = file.attributeDouble(group, "time");
   c.dtOld = file.attributeDouble(group, "dt_old");

@@ -134,20 +134,23 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
 Simulation::~Simulation() = default;
 
 void Simulation::remapFluid(const Simulation& from) {
-  // fields() (non-const) marks the solver's ghosts and rates stale; restoreState sets them.
-  auto& f = fluid_->fields();
-  const auto& g = std::as_const(*from.fluid_).fields();
-  const Decomposition& old = from.dec_;
-  {
-    const Field3<double>* src[] = {&g.p, &g.eps, &g.epsOld, &g.K, &g.KUp[0], &g.KUp[1], &g.KUp[2]};
-    Field3<double>* dst[] = {&f.p, &f.eps, &f.epsOld, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
-    remapFields(old, src, dec_, dst);
-  }
-  for (int d = 0; d < 3; ++d) {
-    const Field3<double>* src[] = {&g.u[d], &std::as_const(*from.fluid_).history()[d]};
-    Field3<double>* dst[] = {&f.u[d], &fluid_->history()[d]};
-    remapFields(old, src, dec_, dst, d);
-  }
+  // The fluid's restart table, walked on both solvers in its one order: cell arrays in one
+  // remap, the face arrays of each staggering in one remap each. The non-const walk marks the
+  // new solver's ghosts and rates stale; restoreState sets them.
+  std::vector<const Field3<double>*> src[4];  // [0..2]: faces normal to d; [3]: cell centred
+  std::vector<Field3<double>*> dst[4];
+  fv::forEachStateField(std::as_const(*from.fluid_),
+                        [&](const fv::FluidSolver::StateField& sf, const Field3<double>* const* a) {
+                          auto& v = src[sf.stagger >= 0 ? sf.stagger : 3];
+                          v.insert(v.end(), a, a + sf.components);
+                        });
+  fv::forEachStateField(*fluid_,
+                        [&](const fv::FluidSolver::StateField& sf, Field3<double>* const* a) {
+                          auto& v = dst[sf.stagger >= 0 ? sf.stagger : 3];
+                          v.insert(v.end(), a, a + sf.components);
+                        });
+  remapFields(from.dec_, src[3], dec_, dst[3]);
+  for (int d = 0; d < 3; ++d) remapFields(from.dec_, src[d], dec_, dst[d], d);
   fluid_->restoreState(from.fluid_->counters());
 }
 

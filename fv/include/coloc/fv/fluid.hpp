@@ -111,6 +111,14 @@ class FluidSolver {
   /// layer as the step leaves them and take the counters; the next step rebuilds the pressure
   /// matrix. With the same decomposition the run then continues bitwise identically. Collective.
   void restoreState(const FluidCounters& c);
+  /// The fluid's restart table: every array that checkpoints write and read and that a
+  /// re-balance remaps, declared once (forEachStateField below walks it).
+  struct StateField {
+    const char* name;  // dataset name in checkpoint files
+    int stagger;       // -1: cell centred; 0, 1, 2: faces normal to that axis
+    int components;    // 1, or 3: a cell vector (one dataset)
+    bool fraction;     // a fluid fraction: restored values must lie in (0, 1]
+  };
 
   /// Cell-centred velocity (mean of the two faces) with one ghost layer filled.
   void cellVelocity(std::array<CellField, 3>& out);
@@ -135,5 +143,33 @@ class FluidSolver {
 /// until the steady residual falls below fluid.steady_tol (> 0). Collective. Returns
 /// {"steps", "sim_time", "stop": "steps" | "end_time" | "steady", "wall_s"}.
 Json runFluidOnly(FluidSolver& solver, const Config& cfg);
+
+/// Walks the fluid's restart table in one fixed order: fn(const FluidSolver::StateField&,
+/// Field3<double>* const* arrays): three slots, the first `components` hold the arrays (const
+/// Field3 for a const solver).
+/// The non-const form goes through fields(), so the ghosts and rates count as stale after it.
+template <class Solver, class Fn>
+void forEachStateField(Solver& fluid, Fn&& fn) {
+  using SF = FluidSolver::StateField;
+  auto& f = fluid.fields();
+  auto& h = fluid.history();
+  using Ptr = decltype(&f.p);
+  // always three slots (the unused ones null): `components` says how many hold arrays
+  const auto visit = [&](const SF& sf, Ptr a0, Ptr a1 = nullptr, Ptr a2 = nullptr) {
+    const Ptr a[3] = {a0, a1, a2};
+    fn(sf, a);
+  };
+  static constexpr SF kU[3] = {{"u_x", 0, 1, false}, {"u_y", 1, 1, false}, {"u_z", 2, 1, false}};
+  static constexpr SF kH[3] = {{"H_x", 0, 1, false}, {"H_y", 1, 1, false}, {"H_z", 2, 1, false}};
+  for (int d = 0; d < 3; ++d) {
+    visit(kU[d], &f.u[d]);
+    visit(kH[d], &h[static_cast<std::size_t>(d)]);
+  }
+  visit({"p", -1, 1, false}, &f.p);
+  visit({"eps", -1, 1, true}, &f.eps);
+  visit({"eps_old", -1, 1, true}, &f.epsOld);
+  visit({"K", -1, 1, false}, &f.K);
+  visit({"KUp", -1, 3, false}, &f.KUp[0], &f.KUp[1], &f.KUp[2]);
+}
 
 }  // namespace coloc::fv
