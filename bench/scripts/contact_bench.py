@@ -80,9 +80,12 @@ def row_of(rep, n, r, out, load):
     return {
         "ranks": n, "repeat": rep, "steps": steps, "particles": particles,
         "s_per_step": run_["wall_s"] / steps,
-        "fv": fr["fv"], "dem": fr["dem"], "coupling": fr["coupling"],
-        "inter_physics": fr["inter_physics"], "wait": fr.get("wait", 0.0),
-        "output": fr.get("output", 0.0),
+        "frac_fv": fr["fv"], "frac_dem": fr["dem"], "frac_coupling": fr["coupling"],
+        "frac_inter_physics": fr["inter_physics"], "frac_wait": fr.get("wait", 0.0),
+        "frac_output": fr.get("output", 0.0),
+        # what bench/scripts/check_shares.py (CTest, label bench) holds the share against
+        "inter_remote_bytes": r["exchange"]["inter_physics_remote"]["bytes"],
+        "inter_local_bytes": r["exchange"]["inter_physics_local"]["bytes"],
         # per particle per coupling step: the ranks' time summed over the particles
         "coupling_ns_per_particle": coupling * n / (particles * steps) * 1e9,
         "coupling_busy_ns_per_particle": busy * n / (particles * steps) * 1e9,
@@ -106,6 +109,7 @@ def main():
     ap.add_argument("--out")
     ap.add_argument("--work")
     ap.add_argument("--resettle", action="store_true")
+    ap.add_argument("--settle-only", action="store_true", help="write the checkpoint and stop")
     ap.add_argument("--set", action="append", default=[])
     args = ap.parse_args()
     name = os.path.splitext(os.path.basename(args.case))[0]
@@ -120,6 +124,8 @@ def main():
         run(args, 1, ["--set", f"run.steps={s}", "--set", f"output.checkpoint_interval={s}",
                       "--set", 'output.checkpoint_file="settled.h5"',
                       "--set", f"output.diagnostics_interval={max(1, s // 20)}"], args.work)
+    if args.settle_only:
+        return
     total = args.settle_steps + args.steps
     rows = []
     for rep in range(args.repeat):
@@ -149,9 +155,10 @@ def main():
     for n in sorted(best):
         b = best[n]
         lines.append(
-            f"| {n} | {b['s_per_step']:.4f} | {100 * b['dem']:.1f} | {100 * b['fv']:.1f} | "
-            f"{100 * b['coupling']:.1f} | {100 * b['inter_physics']:.4f} | "
-            f"{100 * b['wait']:.1f} | {b['coupling_ns_per_particle']:.0f} | "
+            f"| {n} | {b['s_per_step']:.4f} | {100 * b['frac_dem']:.1f} | "
+            f"{100 * b['frac_fv']:.1f} | {100 * b['frac_coupling']:.1f} | "
+            f"{100 * b['frac_inter_physics']:.4f} | "
+            f"{100 * b['frac_wait']:.1f} | {b['coupling_ns_per_particle']:.0f} | "
             f"{b['coordination_mean']:.2f}, {b['coordination_min']:.2f} | "
             f"{b['load_before']:.1f} |")
     lines += ["", "Thread-CPU time (`busy_avg` of the phases; shares of the busy time of the "

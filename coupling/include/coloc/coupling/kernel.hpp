@@ -92,7 +92,7 @@ void interpolate(const Stencils& s, const CellField& f, std::span<double> out);
 /// With fewer particles than half the cells, interpolate() makes one pass a field instead (the
 /// stencils share few cells; measured faster). Cell-interleaved copies of the fields (one cache
 /// line a stencil cell) were measured too: no faster here, the deposit 1.7x slower
-/// (docs/coupling.md).
+/// (docs/benchmarks.md, "Coupling arithmetic").
 inline constexpr std::size_t kMaxFusedFields = 8;
 /// out[k]_i = sum_c w_ic f[k]_c for every field k (at most kMaxFusedFields; out[k] holds
 /// s.count() values).
