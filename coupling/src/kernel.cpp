@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <utility>
 
 #include "coloc/core/error.hpp"
 
@@ -91,6 +93,119 @@ void interpolate(const Stencils& s, const CellField& f, std::span<double> out) {
     s.forEachCell(p, [&](std::int32_t c, double w) { acc += w * data[c]; });
     out[p] = acc;
   }
+}
+
+namespace {
+
+// The 8 cells of a trilinear stencil and their weights, formed once per particle. Weight of
+// cell (di, dj, dk): (wx[di] * wy[dj]) * wz[dk], the product forEachCell() forms, in its order.
+struct Corner8 {
+  std::int32_t c[8];
+  double w[8];
+};
+
+inline void corners(const Stencils& s, std::size_t p, std::int32_t sy, std::int32_t sz,
+                    Corner8& k) {
+  const double t0 = s.fraction(0, p), t1 = s.fraction(1, p), t2 = s.fraction(2, p);
+  const double wx[2] = {1.0 - t0, t0}, wy[2] = {1.0 - t1, t1}, wz[2] = {1.0 - t2, t2};
+  const std::int32_t c0 = s.firstCell(p);
+  int m = 0;
+  for (int dk = 0; dk < 2; ++dk)
+    for (int dj = 0; dj < 2; ++dj)
+      for (int di = 0; di < 2; ++di, ++m) {
+        k.c[m] = c0 + di + dj * sy + dk * sz;
+        k.w[m] = wx[di] * wy[dj] * wz[dk];
+      }
+}
+
+template <std::size_t N>
+void interpolateN(const Stencils& s, std::span<const CellField* const> f,
+                  std::span<double* const> out) {
+  const double* data[N];
+  double* o[N];
+  for (std::size_t k = 0; k < N; ++k) data[k] = f[k]->data().data(), o[k] = out[k];
+  const std::size_t n = s.count();
+  if (s.width() == 1) {
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::int32_t c = s.firstCell(p);
+      for (std::size_t k = 0; k < N; ++k) o[k][p] = 0.0 + 1.0 * data[k][c];
+    }
+    return;
+  }
+  const std::int32_t sy = s.strideY(), sz = s.strideZ();
+  Corner8 st;
+  for (std::size_t p = 0; p < n; ++p) {
+    corners(s, p, sy, sz, st);
+    double acc[N];
+    for (std::size_t k = 0; k < N; ++k) acc[k] = 0.0;
+    for (int m = 0; m < 8; ++m)
+      for (std::size_t k = 0; k < N; ++k) acc[k] += st.w[m] * data[k][st.c[m]];
+    for (std::size_t k = 0; k < N; ++k) o[k][p] = acc[k];
+  }
+}
+
+template <std::size_t N>
+void depositN(const Stencils& s, std::span<const DepositTerm> terms) {
+  double* data[N];
+  const double* a[N];
+  const double* b[N];
+  double scale[N];
+  for (std::size_t k = 0; k < N; ++k) {
+    data[k] = terms[k].f->data().data();
+    a[k] = terms[k].a, b[k] = terms[k].b, scale[k] = terms[k].scale;
+  }
+  const std::size_t n = s.count();
+  const std::int32_t sy = s.strideY(), sz = s.strideZ();
+  Corner8 st;
+  for (std::size_t p = 0; p < n; ++p) {
+    double v[N];
+    for (std::size_t k = 0; k < N; ++k)
+      v[k] = b[k] ? scale[k] * (a[k][p] * b[k][p]) : scale[k] * (a[k] ? a[k][p] : 1.0);
+    if (s.width() == 1) {
+      const std::int32_t c = s.firstCell(p);
+      for (std::size_t k = 0; k < N; ++k) data[k][c] += 1.0 * v[k];
+      continue;
+    }
+    corners(s, p, sy, sz, st);
+    for (int m = 0; m < 8; ++m)
+      for (std::size_t k = 0; k < N; ++k) data[k][st.c[m]] += st.w[m] * v[k];
+  }
+}
+
+template <std::size_t... I>
+void interpolateAny(const Stencils& s, std::span<const CellField* const> f,
+                    std::span<double* const> out, std::index_sequence<I...>) {
+  ((f.size() == I + 1 ? interpolateN<I + 1>(s, f, out) : void()), ...);
+}
+
+template <std::size_t... I>
+void depositAny(const Stencils& s, std::span<const DepositTerm> terms, std::index_sequence<I...>) {
+  ((terms.size() == I + 1 ? depositN<I + 1>(s, terms) : void()), ...);
+}
+
+}  // namespace
+
+void interpolate(const Stencils& s, std::span<const CellField* const> f,
+                 std::span<double* const> out) {
+  if (f.size() != out.size() || f.size() > kMaxFusedFields)
+    throw Error("coupling: interpolate: " + std::to_string(f.size()) + " fields, " +
+                std::to_string(out.size()) + " outputs (at most " +
+                std::to_string(kMaxFusedFields) + ")");
+  // Fewer particles than half the cells: one pass a field. The stencils then share few cells,
+  // and the 4 rows of cells one field's stencils walk stream better than 4 N rows at once
+  // (bench_coupling BM_Sample7: 1e5 particles in 64^3 cells, 2x faster than one fused pass).
+  if (2 * s.count() < f[0]->data().size()) {
+    for (std::size_t k = 0; k < f.size(); ++k) interpolate(s, *f[k], {out[k], s.count()});
+    return;
+  }
+  interpolateAny(s, f, out, std::make_index_sequence<kMaxFusedFields>());
+}
+
+void deposit(const Stencils& s, std::span<const DepositTerm> terms) {
+  if (terms.size() > kMaxFusedFields)
+    throw Error("coupling: deposit: " + std::to_string(terms.size()) + " terms (at most " +
+                std::to_string(kMaxFusedFields) + ")");
+  depositAny(s, terms, std::make_index_sequence<kMaxFusedFields>());
 }
 
 void smooth(const Decomposition& dec, HaloPlan& halo, CellField& f, CellField& scratch) {

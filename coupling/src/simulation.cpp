@@ -267,7 +267,12 @@ void Simulation::computeStencils() {
     err = os.str();
   }
   dec_.comm().raiseIfAny(err);
-  for (std::size_t i = 0; i < n; ++i) volume_[i] = 4.0 / 3.0 * kPi * std::pow(view_.radius[i], 3);
+  // The volumes: one pow per distinct radius in a run of equal radii (the same values).
+  double r = std::numeric_limits<double>::quiet_NaN(), vol = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (view_.radius[i] != r) r = view_.radius[i], vol = 4.0 / 3.0 * kPi * std::pow(r, 3);
+    volume_[i] = vol;
+  }
 }
 
 const CellField& Simulation::sampled(const CellField& f, CellField& smoothed) {
@@ -284,11 +289,16 @@ const CellField& Simulation::sampled(const CellField& f, CellField& smoothed) {
 void Simulation::sampleFluidForDrag() {
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
   // eps = 1 - S(solid) is smooth already; the fluid's eps^{n+1}, ghosts filled by its step.
-  interpolate(stencils_, std::as_const(*fluid_).fields().eps, epsAt_);
+  // The 7 fields in one pass over the stencils (kernel.hpp).
+  const CellField* f[7] = {&std::as_const(*fluid_).fields().eps};
+  double* out[7] = {epsAt_.data()};
   for (int d = 0; d < 3; ++d) {
-    interpolate(stencils_, sampled(uCell_[d], uSmooth_[d]), uAt_[d]);
-    interpolate(stencils_, sampled(gradP_[d], gradPSmooth_[d]), gradPAt_[d]);
+    f[1 + d] = &sampled(uCell_[d], uSmooth_[d]);
+    f[4 + d] = &sampled(gradP_[d], gradPSmooth_[d]);
+    out[1 + d] = uAt_[d].data();
+    out[4 + d] = gradPAt_[d].data();
   }
+  interpolate(stencils_, f, out);
 }
 
 void Simulation::evaluateDrag(double dt) {
@@ -404,12 +414,13 @@ void Simulation::depositParticles() {
   solid_.fill(0.0);
   f.K.fill(0.0);
   for (int d = 0; d < 3; ++d) f.KUp[d].fill(0.0);
-  const std::size_t n = stencils_.count();
-  deposit(stencils_, std::span<const double>(volume_.data(), n), 1.0 / vCell, solid_);
-  deposit(stencils_, std::span<const double>(beta_.data(), n), s, f.K);
-  for (int d = 0; d < 3; ++d)
-    depositProduct(stencils_, std::span<const double>(beta_.data(), n),
-                   std::span<const double>(vDep_[d].data(), n), s, f.KUp[d]);
+  // The 5 deposits in one pass over the stencils (kernel.hpp); beta v~ is formed, not stored.
+  const DepositTerm terms[5] = {{volume_.data(), nullptr, 1.0 / vCell, &solid_},
+                                {beta_.data(), nullptr, s, &f.K},
+                                {beta_.data(), vDep_[0].data(), s, &f.KUp[0]},
+                                {beta_.data(), vDep_[1].data(), s, &f.KUp[1]},
+                                {beta_.data(), vDep_[2].data(), s, &f.KUp[2]}};
+  deposit(stencils_, terms);
 }
 
 void Simulation::sumDepositsAcrossBlocks() {
@@ -470,10 +481,15 @@ void Simulation::sampleFluidForForces() {
     for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
   }
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
+  const CellField* f[6];
+  double* out[6];
   for (int d = 0; d < 3; ++d) {
-    interpolate(stencils_, sampled(uCell_[d], uSmooth_[d]), uAt_[d]);
-    interpolate(stencils_, sampled(gradP_[d], gradPSmooth_[d]), gradPAt_[d]);
+    f[d] = &sampled(uCell_[d], uSmooth_[d]);
+    f[3 + d] = &sampled(gradP_[d], gradPSmooth_[d]);
+    out[d] = uAt_[d].data();
+    out[3 + d] = gradPAt_[d].data();
   }
+  interpolate(stencils_, f, out);
 }
 
 void Simulation::applyCouplingForces(double dt) {

@@ -25,11 +25,11 @@ GlobalGrid grid() {
 
 /// The same global particle set on every rank count; each rank keeps the particles it owns.
 void ownedParticles(const Decomposition& dec, std::vector<double>& x, std::vector<double>& y,
-                    std::vector<double>& z, std::vector<double>& q) {
+                    std::vector<double>& z, std::vector<double>& q, int count = 400) {
   std::mt19937_64 rng(42);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const auto& g = dec.grid();
-  for (int p = 0; p < 400; ++p) {
+  for (int p = 0; p < count; ++p) {
     const Real3 r{g.origin[0] + g.length[0] * u(rng), g.origin[1] + g.length[1] * u(rng),
                   g.origin[2] + g.length[2] * u(rng)};
     const double w = 0.5 + u(rng);
@@ -163,6 +163,53 @@ TEST_P(KernelTest, DepositedFieldIsIndependentOfTheRankCount) {
       ASSERT_NEAR(a[c], b[c], 1e-12 * (1.0 + std::abs(b[c]))) << c;
   }
   MPI_Comm_free(&self);
+}
+
+TEST_P(KernelTest, FusedPassesEqualOneFieldPassesBitForBit) {
+  // interpolate() of 7 fields and deposit() of 5 terms in one pass each give, field by field,
+  // exactly the values of the one-field kernels (same weights, same order of the additions):
+  // sparse particles (interpolate() falls back to one pass a field), and dense ones.
+  const auto dec = Decomposition::uniform(Comm::world(), grid());
+  for (const int count : {40, 400, 8000}) {
+    std::vector<double> x, y, z, q;
+    ownedParticles(dec, x, y, z, q, count);
+    const std::size_t n = x.size();
+    const auto layout = cellLayout(dec, 1);
+    Stencils s;
+    s.compute(GetParam(), dec, layout, x, y, z, n);
+    std::vector<CellField> f(7, CellField(layout));
+    for (int k = 0; k < 7; ++k)
+      forEach(layout.allocated(), [&](int i, int j, int l) {
+        f[k](i, j, l) = field(i + k, j, l) / (1.0 + k) + 1e-3 * (i * j - l);
+      });
+    std::vector<std::vector<double>> one(7, std::vector<double>(n)), fused = one;
+    const CellField* in[7];
+    double* out[7];
+    for (int k = 0; k < 7; ++k) {
+      interpolate(s, f[k], one[k]);
+      in[k] = &f[k];
+      out[k] = fused[k].data();
+    }
+    interpolate(s, in, out);
+    for (int k = 0; k < 7; ++k)
+      for (std::size_t p = 0; p < n; ++p) ASSERT_EQ(one[k][p], fused[k][p]) << k << " " << p;
+
+    std::vector<double> b(n);
+    for (std::size_t p = 0; p < n; ++p) b[p] = 0.1 + 0.37 * static_cast<double>(p % 11);
+    std::vector<CellField> d1(5, CellField(layout, 0.25)), d5 = d1;  // f_c += ...
+    deposit(s, std::span<const double>(), 0.7, d1[0]);
+    deposit(s, q, 1.3, d1[1]);
+    for (int k = 2; k < 5; ++k) depositProduct(s, q, b, 0.3 * k, d1[k]);
+    const DepositTerm terms[5] = {{nullptr, nullptr, 0.7, &d5[0]},
+                                  {q.data(), nullptr, 1.3, &d5[1]},
+                                  {q.data(), b.data(), 0.3 * 2, &d5[2]},
+                                  {q.data(), b.data(), 0.3 * 3, &d5[3]},
+                                  {q.data(), b.data(), 0.3 * 4, &d5[4]}};
+    deposit(s, terms);
+    for (int k = 0; k < 5; ++k)
+      for (std::size_t c = 0; c < d1[k].data().size(); ++c)
+        ASSERT_EQ(d1[k].data()[c], d5[k].data()[c]) << k << " " << c;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Kernels, KernelTest,

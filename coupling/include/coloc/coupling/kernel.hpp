@@ -41,6 +41,11 @@ class Stencils {
   /// axis d (0 for the centroid kernel).
   double fraction(int d, std::size_t p) const { return width_ == 1 ? 0.0 : frac_[d][p]; }
   std::size_t count() const { return n_; }
+  /// The first cell of particle p's stencil (linear index into Field3::data()) and the strides
+  /// of the field layout the stencils were computed for.
+  std::int32_t firstCell(std::size_t p) const { return base_[p]; }
+  std::int32_t strideY() const { return sy_; }
+  std::int32_t strideZ() const { return sz_; }
   /// Calls f(cell, weight) for the cells of particle p: cell is a linear index into
   /// Field3::data(), the weights sum to 1. A stencil is stored compactly (28 bytes a particle for
   /// the trilinear kernel, 4 for the centroid): the first cell (32-bit: a block holds < 2^31
@@ -80,6 +85,29 @@ void depositProduct(const Stencils& s, std::span<const double> a, std::span<cons
                     double scale, CellField& f);
 /// out_i = sum_c w_ic f_c.
 void interpolate(const Stencils& s, const CellField& f, std::span<double> out);
+
+/// The fused kernels of a coupling step: one pass over the particles, each particle's stencil
+/// weights formed once and used for every field. Each field's values are those of the one-field
+/// kernels above, bit for bit (same weights, same order of the additions into each value).
+/// With fewer particles than half the cells, interpolate() makes one pass a field instead (the
+/// stencils share few cells; measured faster). Cell-interleaved copies of the fields (one cache
+/// line a stencil cell) were measured too: no faster here, the deposit 1.7x slower
+/// (docs/benchmarks.md, "Coupling arithmetic").
+inline constexpr std::size_t kMaxFusedFields = 8;
+/// out[k]_i = sum_c w_ic f[k]_c for every field k (at most kMaxFusedFields; out[k] holds
+/// s.count() values).
+void interpolate(const Stencils& s, std::span<const CellField* const> f,
+                 std::span<double* const> out);
+/// One deposit of a fused pass: f_c += sum_i w_ic * scale * q_i with q_i = a_i b_i (b given),
+/// a_i (b null) or 1 (a and b null), as deposit() and depositProduct() form it.
+struct DepositTerm {
+  const double* a = nullptr;
+  const double* b = nullptr;
+  double scale = 1.0;
+  CellField* f = nullptr;
+};
+/// Every term's deposit in one pass (at most kMaxFusedFields terms, distinct fields).
+void deposit(const Stencils& s, std::span<const DepositTerm> terms);
 /// One pass of a conservative, self-adjoint smoothing filter on the owned cells:
 ///   f_c <- f_c + alpha * sum_{6 neighbours} (f_nb - f_c),  alpha = 1/8 (stable below 1/6),
 /// with the neighbours' values from a halo gather and zero flux through walls (mirror ghosts).
