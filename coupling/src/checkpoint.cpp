@@ -159,6 +159,51 @@ CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const
   return info;
 }
 
+// ---- the run's counters ---------------------------------------------------------------------
+
+namespace {
+/// The attribute name of each counter, in one order: fn(name, member).
+template <class C, class Fn>
+void forEachRunCounter(C& c, Fn&& fn) {
+  fn("time", c.time);
+  fn("last_dt", c.lastDt);
+  fn("last_step_dt", c.lastStepDt);
+  fn("steps", c.steps);
+  fn("dem_substeps", c.substeps);
+  fn("momentum_residual", c.momentumResidual);
+  fn("solid_volume", c.solidVolume);
+  fn("fluid_accel_l1", c.accelL1);
+  fn("particle_drag_impulse", c.particleImpulse);
+  fn("fluid_drag_impulse", c.fluidImpulse);
+}
+}  // namespace
+
+void writeRunCounters(H5File& file, const std::string& group, const RunCounters& c) {
+  file.createGroup(group);
+  forEachRunCounter(c, [&](const char* name, const auto& v) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::array<double, 3>>)
+      file.setAttribute(group, name, std::span<const double>(v));
+    else
+      file.setAttribute(group, name, v);
+  });
+}
+
+RunCounters readRunCounters(H5File& file, const std::string& group) {
+  RunCounters c;
+  forEachRunCounter(c, [&](const char* name, auto& v) {
+    using T = std::decay_t<decltype(v)>;
+    if constexpr (std::is_same_v<T, std::array<double, 3>>) {
+      const auto a = file.attributeDoubles(group, name);
+      for (std::size_t d = 0; d < 3 && d < a.size(); ++d) v[d] = a[d];
+    } else if constexpr (std::is_same_v<T, long long>) {
+      v = file.attributeInt(group, name);
+    } else {
+      v = file.attributeDouble(group, name);
+    }
+  });
+  return c;
+}
+
 // ---- fluid --------------------------------------------------------------------------------------
 
 void writeFluidState(H5File& file, const std::string& group, const Decomposition& dec,

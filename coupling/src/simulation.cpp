@@ -77,10 +77,10 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
     transfer_ = demDec_ ? proxyTransfer(dec_, *dem_) : colocatedTransfer(*dem_);
   }
   if (file) {
-    restoreCounters(*file);
+    run_ = readRunCounters(*file, "/simulation");
     file->close();
   }
-  if (from) copyCounters(*from);
+  if (from) run_ = from->run_;
   coupled_ = mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem;
   if (!coupled_) return;
 
@@ -154,32 +154,19 @@ void Simulation::remapFluid(const Simulation& from) {
   fluid_->restoreState(from.fluid_->counters());
 }
 
-void Simulation::copyCounters(const Simulation& from) {
-  time_ = from.time_;
-  lastDt_ = from.lastDt_;
-  lastStepDt_ = from.lastStepDt_;
-  steps_ = from.steps_;
-  substeps_ = from.substeps_;
-  momentumResidual_ = from.momentumResidual_;
-  solidVolume_ = from.solidVolume_;
-  accelL1_ = from.accelL1_;
-  particleImpulse_ = from.particleImpulse_;
-  fluidImpulse_ = from.fluidImpulse_;
-}
-
 void Simulation::beginRun() {
   timers_.beginRun();
-  runStartSteps_ = steps_;
-  runStartSubsteps_ = substeps_;
+  runStartSteps_ = run_.steps;
+  runStartSubsteps_ = run_.substeps;
 }
 
 bool Simulation::finished() const {
   // A fluid-only run may stop at steady state (same verdict on every rank).
-  if (mode_ == RunMode::FluidOnly && steadyTol_ > 0 && steps_ > 1 &&
+  if (mode_ == RunMode::FluidOnly && steadyTol_ > 0 && run_.steps > 1 &&
       fluid_->steadyResidual() < steadyTol_)
     return true;
-  if (maxSteps_ > 0) return steps_ >= maxSteps_;
-  return time_ >= endTime_ * (1.0 - 1e-12);
+  if (maxSteps_ > 0) return run_.steps >= maxSteps_;
+  return run_.time >= endTime_ * (1.0 - 1e-12);
 }
 
 void Simulation::step() {
@@ -187,13 +174,13 @@ void Simulation::step() {
     case RunMode::FluidOnly: {
       const double dt = fluid_->nextDt();
       advanceFluid(dt);
-      lastDt_ = dt;
+      run_.lastDt = dt;
       break;
     }
     case RunMode::ParticlesOnly: {
       const long long n = std::max<long long>(1, demSubsteps_);
       advanceParticles(static_cast<int>(n));
-      lastDt_ = static_cast<double>(n) * dem_->dt();
+      run_.lastDt = static_cast<double>(n) * dem_->dt();
       break;
     }
     case RunMode::Coupled:
@@ -209,7 +196,7 @@ void Simulation::step() {
       computeStencils();
       sampleFluidForDrag();
       evaluateDrag(dt);
-      fault::point("coupling", steps_ + 1);
+      fault::point("coupling", run_.steps + 1);
       depositParticles();
       waitForSlowestRank();
       sumDepositsAcrossBlocks();
@@ -220,12 +207,12 @@ void Simulation::step() {
       applyCouplingForces(dt);
       handForcesToParticles();
       advanceParticles(static_cast<int>(nSub));
-      lastDt_ = dt;
+      run_.lastDt = dt;
       break;
     }
   }
-  time_ += lastDt_;
-  ++steps_;
+  run_.time += run_.lastDt;
+  ++run_.steps;
 }
 
 void Simulation::waitForSlowestRank() {
@@ -336,7 +323,7 @@ void Simulation::evaluateDrag(double dt) {
     std::array<double, 3> ownPressure{};
     if (self)
       denom = correctForSelfVelocity(i, epsFluid, eps, std::sqrt(slip2), still ? 0.0 : dt,
-                                     time_ + std::max(dt, 0.0), beta, ownPressure, err);
+                                     run_.time + std::max(dt, 0.0), beta, ownPressure, err);
     if (still) {
       // Particles that cannot move: the plain coefficient and their (zero) velocity.
       beta_[i] = beta / denom;
@@ -450,13 +437,13 @@ void Simulation::updateFluidCoefficients() {
     solid += solid_(i, j, k);
     f.eps(i, j, k) = std::clamp(1.0 - solid_(i, j, k), epsMin_, 1.0);
   });
-  solidVolume_ = dec_.comm().sum(solid) * dec_.grid().cellVolume();
+  run_.solidVolume = dec_.comm().sum(solid) * dec_.grid().cellVolume();
 }
 
 void Simulation::advanceFluid(double dt) {
-  fault::point("fluid", steps_ + 1);
+  fault::point("fluid", run_.steps + 1);
   fluid_->step(dt);
-  lastStepDt_ = dt;
+  run_.lastStepDt = dt;
 }
 
 void Simulation::refreshCellVelocity() {
@@ -465,12 +452,12 @@ void Simulation::refreshCellVelocity() {
   fluid_->cellVelocity(uCell_);
   for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
   // L1 norm of the fluid acceleration over the step (time series of benchmark 1).
-  if (lastStepDt_ > 0) {
+  if (run_.lastStepDt > 0) {
     double accel = 0;
     forEach(solid_.interior(), [&](int i, int j, int k) {
       for (int d = 0; d < 3; ++d) accel += std::abs(uCell_[d](i, j, k) - uCellOld_[d](i, j, k));
     });
-    accelL1_ = dec_.comm().sum(accel) * dec_.grid().cellVolume() / lastStepDt_;
+    run_.accelL1 = dec_.comm().sum(accel) * dec_.grid().cellVolume() / run_.lastStepDt;
   }
 }
 
@@ -522,12 +509,12 @@ void Simulation::applyCouplingForces(double dt) {
   dec_.comm().sumInPlace(std::span<double>(sums, 9));
   double gross = 0, diff = 0;
   for (int d = 0; d < 3; ++d) {
-    particleImpulse_[d] = sums[d];
-    fluidImpulse_[d] = sums[3 + d];
+    run_.particleImpulse[d] = sums[d];
+    run_.fluidImpulse[d] = sums[3 + d];
     gross = std::max(gross, sums[6 + d]);
     diff = std::max(diff, std::abs(sums[d] + sums[3 + d]));
   }
-  if (gross > 0) momentumResidual_ = std::max(momentumResidual_, diff / gross);
+  if (gross > 0) run_.momentumResidual = std::max(run_.momentumResidual, diff / gross);
 }
 
 void Simulation::handForcesToParticles() {
@@ -536,10 +523,10 @@ void Simulation::handForcesToParticles() {
 
 void Simulation::advanceParticles(int n) {
   for (int s = 0; s < n; ++s) {
-    if (s == n / 2) fault::point("dem", steps_ + 1);
+    if (s == n / 2) fault::point("dem", run_.steps + 1);
     dem_->substep();
   }
-  substeps_ += n;
+  run_.substeps += n;
 }
 
 // ---- checkpoints (the file format: coupling/checkpoint.hpp) ----------------------------------
@@ -556,7 +543,7 @@ void Simulation::writeCheckpoint(const std::string& path, const std::string& sta
       try {
         demState = dem_->saveState();
       } catch (const Error& e) {
-        demState = rawDemState(dem_->particles(), dem_->time(), substeps_);
+        demState = rawDemState(dem_->particles(), dem_->time(), run_.substeps);
         demSnapshot = std::string("raw (no contact histories): ") + e.what();
       }
     }
@@ -571,30 +558,19 @@ void Simulation::writeCheckpoint(const std::string& path, const std::string& sta
   f.setAttribute("/", "case", cfg_.string("name"));
   f.setAttribute("/", "mode", runModeName(mode_));
   f.setAttribute("/", "ranks", comm.size());
-  f.setAttribute("/", "step", steps_);
-  f.setAttribute("/", "time", time_);
+  f.setAttribute("/", "step", run_.steps);
+  f.setAttribute("/", "time", run_.time);
   f.setAttribute("/", "config", cfg_.json().dump());
   writeGrid(f, dec_.grid());
   writeLayouts(f, layouts_, dec_, demDec_);
-  const std::string s = "/simulation";
-  f.createGroup(s);
-  f.setAttribute(s, "time", time_);
-  f.setAttribute(s, "last_dt", lastDt_);
-  f.setAttribute(s, "last_step_dt", lastStepDt_);
-  f.setAttribute(s, "steps", steps_);
-  f.setAttribute(s, "dem_substeps", substeps_);
-  f.setAttribute(s, "momentum_residual", momentumResidual_);
-  f.setAttribute(s, "solid_volume", solidVolume_);
-  f.setAttribute(s, "fluid_accel_l1", accelL1_);
-  f.setAttribute(s, "particle_drag_impulse", std::span<const double>(particleImpulse_));
-  f.setAttribute(s, "fluid_drag_impulse", std::span<const double>(fluidImpulse_));
+  writeRunCounters(f, "/simulation", run_);
   if (fluid_) writeFluidState(f, "/fluid", dec_, std::as_const(*fluid_));
   if (demState) {
     writeDemState(f, "/particles", *demState);
     f.setAttribute("/particles", "snapshot", demSnapshot);
   }
   // Fault point (tests/robustness, coloc_faults only): after the data, before the rename.
-  fault::point("checkpoint", steps_);
+  fault::point("checkpoint", run_.steps);
   f.close();
 }
 
@@ -619,26 +595,8 @@ Layouts Simulation::restartLayouts(const Comm& world, const Config& cfg,
   return L;
 }
 
-void Simulation::restoreCounters(H5File& f) {
-  const std::string s = "/simulation";
-  time_ = f.attributeDouble(s, "time");
-  lastDt_ = f.attributeDouble(s, "last_dt");
-  lastStepDt_ = f.attributeDouble(s, "last_step_dt");
-  steps_ = f.attributeInt(s, "steps");
-  substeps_ = f.attributeInt(s, "dem_substeps");
-  momentumResidual_ = f.attributeDouble(s, "momentum_residual");
-  solidVolume_ = f.attributeDouble(s, "solid_volume");
-  accelL1_ = f.attributeDouble(s, "fluid_accel_l1");
-  const auto pi = f.attributeDoubles(s, "particle_drag_impulse");
-  const auto fi = f.attributeDoubles(s, "fluid_drag_impulse");
-  for (std::size_t d = 0; d < 3 && d < pi.size() && d < fi.size(); ++d) {
-    particleImpulse_[d] = pi[d];
-    fluidImpulse_[d] = fi[d];
-  }
-}
-
 void Simulation::writeOutput(OutputWriter& out) {
-  if (!out.due(steps_)) return;
+  if (!out.due(run_.steps)) return;
   ScopedPhase t(timers_, Phase::Output);
   if (fluid_ && out.options().fields) {
     const auto& f = fluid_->fields();
@@ -648,7 +606,7 @@ void Simulation::writeOutput(OutputWriter& out) {
         for (auto& u : uCell_) u = CellField(f.p.layout());
       fluid_->cellVelocity(uCell_);
     }
-    out.writeFields(steps_, time_,
+    out.writeFields(run_.steps, run_.time,
                     {OutputField::scalar("p", f.p, "m^2/s^2"),  // kinematic: p / rho
                      OutputField::vector("u", uCell_, "m/s"),
                      OutputField::scalar("eps", f.eps, "1"), OutputField::scalar("K", f.K, "1/s")});
@@ -656,7 +614,7 @@ void Simulation::writeOutput(OutputWriter& out) {
   if (dem_ && out.options().particles) {
     const auto& p = dem_->particles();
     const std::size_t n = p.nOwned;
-    out.writeParticles(steps_, time_, std::span<const std::int64_t>(p.id.data(), n),
+    out.writeParticles(run_.steps, run_.time, std::span<const std::int64_t>(p.id.data(), n),
                        firstRows(p.x, n), firstRows(p.v, n), firstRows(p.omega, n),
                        std::span<const double>(p.radius.data(), n));
   }
@@ -667,18 +625,19 @@ Json Simulation::report(double wallSeconds) const {
   Json out = timers_.report(comm, wallSeconds);
   const double wall = comm.max(wallSeconds);
   out["mpi"] = {{"ranks", comm.size()}, {"dims", {dec_.dims()[0], dec_.dims()[1], dec_.dims()[2]}}};
-  out["run"] = {{"mode", runModeName(mode_)}, {"steps", steps_}, {"dem_substeps", substeps_},
-                {"sim_time", time_},          {"wall_s", wall},  {"first_step", runStartSteps_}};
+  out["run"] = {
+      {"mode", runModeName(mode_)}, {"steps", run_.steps}, {"dem_substeps", run_.substeps},
+      {"sim_time", run_.time},      {"wall_s", wall},      {"first_step", runStartSteps_}};
   const long long particles = dem_ ? dem_->globalCount() : 0;
   const double cells = static_cast<double>(dec_.grid().cellCount());
   out["throughput"] = {
       {"cell_steps_per_s",
-       fluid_ && wall > 0 ? cells * static_cast<double>(steps_ - runStartSteps_) / wall : 0.0},
-      {"particle_steps_per_s", dem_ && wall > 0
-                                   ? static_cast<double>(particles) *
-                                         static_cast<double>(substeps_ - runStartSubsteps_) / wall
-                                   : 0.0}};
-  out["checks"] = {{"momentum_balance", momentumResidual_}, {"mass_balance", 0.0}};
+       fluid_ && wall > 0 ? cells * static_cast<double>(run_.steps - runStartSteps_) / wall : 0.0},
+      {"particle_steps_per_s",
+       dem_ && wall > 0 ? static_cast<double>(particles) *
+                              static_cast<double>(run_.substeps - runStartSubsteps_) / wall
+                        : 0.0}};
+  out["checks"] = {{"momentum_balance", run_.momentumResidual}, {"mass_balance", 0.0}};
   if (fluid_) {
     const Json fd = fluid_->diagnostics();
     for (auto& [k, v] : fd.items()) {
@@ -702,7 +661,7 @@ Json Simulation::report(double wallSeconds) const {
                                     {"modelled_imbalance", layouts_.modelledImbalance},
                                     {"uniform_modelled_imbalance", layouts_.uniformImbalance}};
   if (coupled_)
-    out["coupling"] = {{"solid_volume", solidVolume_},
+    out["coupling"] = {{"solid_volume", run_.solidVolume},
                        {"kernel", kernel_ == KernelKind::Centroid ? "centroid" : "trilinear"},
                        {"drag", dragLawName(drag_)}};
   return out;

@@ -19,6 +19,7 @@
 // rank, with the file name.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 
@@ -31,6 +32,18 @@
 #include "coloc/partition/decomposition.hpp"
 
 namespace coloc::coupling {
+
+/// The coupled run's own counters: the state besides the fields and particles that a restart
+/// reads back and a re-balance carries over.
+struct RunCounters {
+  double time = 0, lastDt = 0, lastStepDt = 0;
+  long long steps = 0, substeps = 0;
+  double momentumResidual = 0, solidVolume = 0, accelL1 = 0;
+  std::array<double, 3> particleImpulse{}, fluidImpulse{};
+};
+/// The counters as attributes of `group` (created), and back (one table, checkpoint.cpp).
+void writeRunCounters(H5File& file, const std::string& group, const RunCounters& c);
+RunCounters readRunCounters(H5File& file, const std::string& group);
 
 inline constexpr const char* kCheckpointFormat = "coloc-checkpoint";
 inline constexpr long long kCheckpointVersion = 1;

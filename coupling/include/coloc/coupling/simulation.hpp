@@ -55,6 +55,7 @@
 #include "coloc/core/config.hpp"
 #include "coloc/core/run_config.hpp"
 #include "coloc/core/timers.hpp"
+#include "coloc/coupling/checkpoint.hpp"
 #include "coloc/coupling/drag.hpp"
 #include "coloc/coupling/kernel.hpp"
 #include "coloc/coupling/layouts.hpp"
@@ -111,10 +112,10 @@ class Simulation {
   bool finished() const;
 
   RunMode mode() const { return mode_; }
-  double time() const { return time_; }
-  long long steps() const { return steps_; }
-  long long demSubsteps() const { return substeps_; }
-  double lastDt() const { return lastDt_; }
+  double time() const { return run_.time; }
+  long long steps() const { return run_.steps; }
+  long long demSubsteps() const { return run_.substeps; }
+  double lastDt() const { return run_.lastDt; }
   const Decomposition& decomposition() const { return dec_; }
   /// The DEM's blocks: the same as decomposition() unless partition.strategy is independent.
   const Decomposition& particleDecomposition() const { return demDec_ ? *demDec_ : dec_; }
@@ -127,13 +128,13 @@ class Simulation {
   /// (global sums, N s; they cancel), and the worst mismatch over the run relative to the gross
   /// exchanged momentum sum_i beta'_i (|u_i| + |v~_i|) dt (the scale of its round-off: when the
   /// slip is small the net impulse is a small difference of large terms).
-  std::array<double, 3> particleDragImpulse() const { return particleImpulse_; }
-  std::array<double, 3> fluidDragImpulse() const { return fluidImpulse_; }
-  double momentumBalance() const { return momentumResidual_; }
+  std::array<double, 3> particleDragImpulse() const { return run_.particleImpulse; }
+  std::array<double, 3> fluidDragImpulse() const { return run_.fluidImpulse; }
+  double momentumBalance() const { return run_.momentumResidual; }
   /// L1 norm of the cell-centred fluid acceleration over the last step, sum |du/dt| V (m^4/s^2).
-  double fluidAccelerationL1() const { return accelL1_; }
+  double fluidAccelerationL1() const { return run_.accelL1; }
   /// Total solid volume deposited on the cells (global, m^3) after the last deposit.
-  double depositedSolidVolume() const { return solidVolume_; }
+  double depositedSolidVolume() const { return run_.solidVolume; }
 
   /// Fields (p, cell-centred u, eps, K) and particles (id, x, v, omega, radius, rank) to HDF5 +
   /// XDMF when the writer says this step is due. Collective.
@@ -162,8 +163,6 @@ class Simulation {
 
  private:
   Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint, Simulation* from);
-  void restoreCounters(H5File& file);
-  void copyCounters(const Simulation& from);
   void remapFluid(const Simulation& from);
   void waitForSlowestRank();
   void gatherParticles();
@@ -227,11 +226,10 @@ class Simulation {
   /// (SelfResponse::pressure), from evaluateDrag to applyCouplingForces of the same step.
   std::array<std::vector<double>, 3> ownPressure_;
 
-  double time_ = 0, lastDt_ = 0, lastStepDt_ = 0, endTime_ = 0;
-  long long steps_ = 0, maxSteps_ = 0, substeps_ = 0;
+  RunCounters run_;
+  double endTime_ = 0;
+  long long maxSteps_ = 0;
   long long runStartSteps_ = 0, runStartSubsteps_ = 0;  // counters at beginRun() (throughput)
-  std::array<double, 3> particleImpulse_{}, fluidImpulse_{};
-  double momentumResidual_ = 0, solidVolume_ = 0, accelL1_ = 0;
 };
 
 }  // namespace coloc::coupling
