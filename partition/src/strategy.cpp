@@ -103,4 +103,14 @@ StrategyBlocks chooseBlocks(const std::string& strategy, const StrategyInput& in
   return out;
 }
 
+TiledLayout tiledStrategy(const StrategyInput& in, const std::vector<double>& cost,
+                          double surfaceCost) {
+  TiledOptions opt;
+  opt.minCells = std::max(2, in.minCells);
+  opt.granularity = std::max(1, in.granularity);
+  opt.surfaceCost = surfaceCost;
+  opt.ghost = 2;
+  return tiledBoxes(in.grid, cost, in.ranks, opt);
+}
+
 }  // namespace coloc

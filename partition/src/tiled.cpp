@@ -60,6 +60,7 @@ class Bisector {
                      [&](int a, int b) { return box.hi[a] - box.lo[a] > box.hi[b] - box.lo[b]; });
     // The halving split first, then uneven splits next to it (up to a quarter of p away) where
     // they balance better, and beyond that only while no split is legal.
+    for (int d = 0; d < 3; ++d) planes(box, d, cand_[d]);
     int bestAxis = -1, bestAt = 0, bestPl = 0;
     double best = std::numeric_limits<double>::infinity();
     for (int off = 0; off < p && (bestAxis < 0 || off <= p / 4); ++off)
@@ -70,7 +71,7 @@ class Bisector {
         for (int d : axes) {
           int cut = 0;
           double score = 0;
-          if (bestCut(box, d, pl, p - pl, cut, score) && score < best * (1 - kTie)) {
+          if (bestCut(cand_[d], pl, p - pl, cut, score) && score < best * (1 - kTie)) {
             best = score;
             bestAxis = d;
             bestAt = cut;
@@ -92,26 +93,39 @@ class Bisector {
   }
 
  private:
-  /// The legal plane along d (both sides can hold their ranks) with the smallest larger cost per
-  /// rank; false when there is none.
-  bool bestCut(const IndexBox& box, int d, int pl, int pr, int& cut, double& best) const {
+  /// A plane along an axis: where, the cost of both sides, how many boxes each side holds.
+  struct Plane {
+    int at = 0;
+    double lo = 0, hi = 0;
+    long long capLo = 0, capHi = 0;
+  };
+  /// Every legal plane of the region along d (on the granularity, both sides thick enough).
+  void planes(const IndexBox& box, int d, std::vector<Plane>& out) const {
+    out.clear();
     const int a = box.lo[d], b = box.hi[d];
     long long cross = 1;
     for (int e = 0; e < 3; ++e)
       if (e != d) cross *= slots(e, box.lo[e], box.hi[e]);
-    best = std::numeric_limits<double>::infinity();
-    bool found = false;
     const int first = ((a + minBlock_[d]) + gran_ - 1) / gran_ * gran_;
     for (int c = first; c < b; c += gran_) {
       if (c - a < minCells_[d] || b - c < minCells_[d]) continue;
-      if (slots(d, a, c) * cross < pl || slots(d, c, b) * cross < pr) continue;
       IndexBox lo = box, hi = box;
       lo.hi[d] = c;
       hi.lo[d] = c;
-      const double s = std::max(cost(lo) / pl, cost(hi) / pr);
+      out.push_back({c, cost(lo), cost(hi), slots(d, a, c) * cross, slots(d, c, b) * cross});
+    }
+  }
+  /// The plane where both sides hold their ranks with the smallest larger cost per rank; false
+  /// when there is none.
+  static bool bestCut(const std::vector<Plane>& planes, int pl, int pr, int& cut, double& best) {
+    best = std::numeric_limits<double>::infinity();
+    bool found = false;
+    for (const Plane& q : planes) {
+      if (q.capLo < pl || q.capHi < pr) continue;
+      const double s = std::max(q.lo / pl, q.hi / pr);
       if (s < best) {
         best = s;
-        cut = c;
+        cut = q.at;
         found = true;
       }
     }
@@ -124,6 +138,7 @@ class Bisector {
   std::vector<IndexBox>& out_;
   int gran_ = 1;
   Int3 minCells_{}, minBlock_{};
+  std::array<std::vector<Plane>, 3> cand_;  // scratch of one bisection step
 };
 
 }  // namespace
