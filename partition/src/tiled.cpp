@@ -19,9 +19,10 @@ constexpr double kTie = 1e-9;
 /// The recursive bisection over one cost table.
 class Bisector {
  public:
-  Bisector(const GlobalGrid& g, const PrefixSum& ps, const TiledOptions& opt,
+  /// `reach`: how far from halving the rank split may go, as a fraction of the ranks.
+  Bisector(const GlobalGrid& g, const PrefixSum& ps, const TiledOptions& opt, double reach,
            std::vector<IndexBox>& out)
-      : g_(g), ps_(ps), opt_(opt), out_(out) {
+      : g_(g), ps_(ps), opt_(opt), reach_(reach), out_(out) {
     gran_ = std::max(1, opt.granularity);
     for (int d = 0; d < 3; ++d) {
       minCells_[d] = std::max(1, std::min(opt.minCells, g.cells[d]));
@@ -58,24 +59,33 @@ class Bisector {
     std::array<int, 3> axes{0, 1, 2};
     std::stable_sort(axes.begin(), axes.end(),
                      [&](int a, int b) { return box.hi[a] - box.lo[a] > box.hi[b] - box.lo[b]; });
-    // The halving split first, then uneven splits next to it (up to a quarter of p away) where
-    // they balance better, and beyond that only while no split is legal.
+    // Every legal plane, each with the rank split that suits it best: the halving split, or
+    // the split nearest to the plane's share of the cost (a bed that holds most of the work
+    // gets most of the ranks) within `reach` of halving, within what both sides can hold.
+    const long long reach = static_cast<long long>(reach_ * p);
     for (int d = 0; d < 3; ++d) planes(box, d, cand_[d]);
     int bestAxis = -1, bestAt = 0, bestPl = 0;
     double best = std::numeric_limits<double>::infinity();
-    for (int off = 0; off < p && (bestAxis < 0 || off <= p / 4); ++off)
-      for (int sign : {+1, -1}) {
-        if (off == 0 && sign < 0) continue;
-        const int pl = p / 2 + sign * off;
-        if (pl < 1 || pl > p - 1) continue;
-        for (int d : axes) {
-          int cut = 0;
-          double score = 0;
-          if (bestCut(cand_[d], pl, p - pl, cut, score) && score < best * (1 - kTie)) {
+    for (int d : axes)
+      for (const Plane& q : cand_[d]) {
+        const long long lo = std::max<long long>(1, p - q.capHi),
+                        hi = std::min<long long>(p - 1, q.capLo);
+        if (lo > hi) continue;
+        const long long half = p / 2;
+        // the rule's window where it meets the legal splits, else the legal split nearest half
+        long long wlo = std::max(lo, half - reach), whi = std::min(hi, half + reach);
+        if (wlo > whi) wlo = whi = std::clamp(half, lo, hi);
+        const double share = q.lo + q.hi > 0 ? p * q.lo / (q.lo + q.hi) : 0.5 * p;
+        const long long f = static_cast<long long>(std::floor(share));
+        for (long long pl : {static_cast<long long>(p / 2), f, f + 1}) {
+          pl = std::clamp(pl, wlo, whi);
+          const double score =
+              std::max(q.lo / static_cast<double>(pl), q.hi / static_cast<double>(p - pl));
+          if (score < best * (1 - kTie)) {
             best = score;
             bestAxis = d;
-            bestAt = cut;
-            bestPl = pl;
+            bestAt = q.at;
+            bestPl = static_cast<int>(pl);
           }
         }
       }
@@ -115,26 +125,10 @@ class Bisector {
       out.push_back({c, cost(lo), cost(hi), slots(d, a, c) * cross, slots(d, c, b) * cross});
     }
   }
-  /// The plane where both sides hold their ranks with the smallest larger cost per rank; false
-  /// when there is none.
-  static bool bestCut(const std::vector<Plane>& planes, int pl, int pr, int& cut, double& best) {
-    best = std::numeric_limits<double>::infinity();
-    bool found = false;
-    for (const Plane& q : planes) {
-      if (q.capLo < pl || q.capHi < pr) continue;
-      const double s = std::max(q.lo / pl, q.hi / pr);
-      if (s < best) {
-        best = s;
-        cut = q.at;
-        found = true;
-      }
-    }
-    return found;
-  }
-
   const GlobalGrid& g_;
   const PrefixSum& ps_;
   TiledOptions opt_;
+  double reach_ = 1.0;
   std::vector<IndexBox>& out_;
   int gran_ = 1;
   Int3 minCells_{}, minBlock_{};
@@ -199,6 +193,32 @@ std::vector<double> tiledCellCost(const GlobalGrid& g, const TiledCostModel& m,
   return c;
 }
 
+double boxCostFloor(const GlobalGrid& grid, const std::vector<double>& cost, int minCells) {
+  const PrefixSum ps(grid, cost);
+  Int3 m{};
+  for (int d = 0; d < 3; ++d) m[d] = std::max(1, std::min(minCells, grid.cells[d]));
+  // cheapest m-box starting at each corner, then for each cell the cheapest over the corners
+  // that hold it
+  const Int3 nc{grid.cells[0] - m[0] + 1, grid.cells[1] - m[1] + 1, grid.cells[2] - m[2] + 1};
+  std::vector<double> corner(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2]);
+  for (int k = 0; k < nc[2]; ++k)
+    for (int j = 0; j < nc[1]; ++j)
+      for (int i = 0; i < nc[0]; ++i)
+        corner[static_cast<std::size_t>(i + nc[0] * (j + nc[1] * k))] =
+            ps.box(i, i + m[0], j, j + m[1], k, k + m[2]);
+  double floor = 0;
+  forEach(IndexBox{{0, 0, 0}, grid.cells}, [&](int i, int j, int k) {
+    double cheapest = std::numeric_limits<double>::infinity();
+    for (int c = std::max(0, k - m[2] + 1); c <= std::min(k, nc[2] - 1); ++c)
+      for (int b = std::max(0, j - m[1] + 1); b <= std::min(j, nc[1] - 1); ++b)
+        for (int a = std::max(0, i - m[0] + 1); a <= std::min(i, nc[0] - 1); ++a)
+          cheapest =
+              std::min(cheapest, corner[static_cast<std::size_t>(a + nc[0] * (b + nc[1] * c))]);
+    floor = std::max(floor, cheapest);
+  });
+  return floor;
+}
+
 void evaluateBoxes(const std::vector<double>& cost, const TiledOptions& opt, TiledLayout& l) {
   const GlobalGrid& g = l.layout.grid;
   const PrefixSum ps(g, cost);
@@ -225,15 +245,39 @@ TiledLayout tiledBoxes(const GlobalGrid& grid, const std::vector<double>& cost, 
   const PrefixSum ps(grid, cost);
   TiledLayout l;
   l.layout.grid = grid;
-  l.layout.box.assign(static_cast<std::size_t>(ranks), IndexBox{});
-  Bisector bis(grid, ps, opt, l.layout.box);
-  const IndexBox all{{0, 0, 0}, grid.cells};
-  if (bis.capacity(all) < ranks)
-    throw ConfigError("partition.strategy",
-                      "tiled: the grid holds at most " + std::to_string(bis.capacity(all)) +
-                          " boxes of at least " + std::to_string(opt.minCells) +
-                          " cells a side, not " + std::to_string(ranks));
-  bis.bisect(all, ranks, 0);
+  // Three rules for the rank split (halving only; up to a quarter of the ranks from halving;
+  // any), each a full bisection. The layout with the cheapest largest box wins; layouts within
+  // 0.1 % of it count as equal, and of those the one with the fewest halo cells wins (less to
+  // send for the same balance; ties: the first).
+  std::vector<IndexBox> boxes(static_cast<std::size_t>(ranks));
+  struct Tried {
+    double worst = 0;
+    long long halo = 0;
+    std::vector<IndexBox> boxes;
+  };
+  std::vector<Tried> tried;
+  for (const double reach : {0.0, 0.25, 1.0}) {
+    Bisector bis(grid, ps, opt, reach, boxes);
+    const IndexBox all{{0, 0, 0}, grid.cells};
+    if (bis.capacity(all) < ranks)
+      throw ConfigError("partition.strategy",
+                        "tiled: the grid holds at most " + std::to_string(bis.capacity(all)) +
+                            " boxes of at least " + std::to_string(opt.minCells) +
+                            " cells a side, not " + std::to_string(ranks));
+    bis.bisect(all, ranks, 0);
+    Tried t{0, 0, boxes};
+    for (const auto& b : boxes) {
+      t.worst = std::max(t.worst, bis.cost(b));
+      t.halo += haloCells(grid, b, opt.ghost);
+    }
+    tried.push_back(std::move(t));
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& t : tried) best = std::min(best, t.worst);
+  const Tried* pick = nullptr;
+  for (const auto& t : tried)
+    if (t.worst <= best * (1 + 1e-3) && (!pick || t.halo < pick->halo)) pick = &t;
+  l.layout.box = pick->boxes;
   evaluateBoxes(cost, opt, l);
   return l;
 }

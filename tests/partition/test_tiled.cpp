@@ -173,6 +173,17 @@ TEST(Tiled, SurfaceTermCountsHaloCellsAndBalancesThem) {
   EXPECT_DOUBLE_EQ(copy.maxCost, l.maxCost);
 }
 
+TEST(Tiled, FloorBoundsEveryLayoutFromBelow) {
+  GlobalGrid g;
+  g.cells = {12, 4, 10};
+  std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 1.0);
+  cost[at(g, 5, 1, 3)] = 100.0;  // one hot cell: a 2x2x2 box holding it costs at least 107
+  EXPECT_DOUBLE_EQ(boxCostFloor(g, cost, 2), 107.0);
+  for (int p : {2, 7, 16, 60}) EXPECT_GE(tiledBoxes(g, cost, p, {}).maxCost, 107.0) << p;
+  // 60 boxes of 2x2x2 fill the grid: the floor is met.
+  EXPECT_DOUBLE_EQ(tiledBoxes(g, cost, 60, {}).maxCost, 107.0);
+}
+
 TEST(Tiled, CellCostFromCounts) {
   GlobalGrid g;
   g.cells = {2, 1, 1};

@@ -2,15 +2,21 @@
 // (and so of whole DEM bins), the boxes tile the grid, and they need not form a process grid.
 //
 // tiledBoxes() finds the boxes by recursive coordinate bisection (RCB) of a per-cell cost: a
-// region given p ranks is split into two regions of floor(p/2) and ceil(p/2) ranks by one plane
-// of cells, placed where the larger of the two costs per rank is smallest, along the axis where
-// that is smallest (ties: the longest axis of the region, in cells). The cost of a region is the
-// sum of its cells' cost plus a surface term, `surfaceCost` per halo cell of the region (the
-// ghost and halo work a box pays for its neighbours). Every box keeps at least `minCells` cells
-// along each axis (the ghost width; an axis thinner than that stays whole) and every cut lies on a
-// multiple of `granularity` cells (DEM bins spanning several cells stay whole). Where the halving
-// split has no legal plane the split closest to it that has one is taken; a grid that cannot hold
-// `ranks` boxes at all is refused (ConfigError). No MPI: the run and `coloc plan` call it alike.
+// region given p ranks is split in two by one plane of cells, and its ranks are split with it.
+// Every legal plane of every axis is tried (axes longest first, in cells), each with the rank
+// split p/2 | p - p/2 and with the split nearest to the plane's share of the cost; the plane and
+// split whose larger cost per rank is smallest win (ties: the first tried). Splitting the ranks
+// by the cost, not always in halves, lets a bed holding most of the work take most of the ranks;
+// it can also leave a side with a share its whole cells divide badly. So the bisection runs
+// three times, the rank split allowed 0, p/4 and p ranks from halving, and the layout whose
+// largest box is cheapest is kept.
+// The cost of a region is the sum of its cells' cost plus a surface term, `surfaceCost` per halo
+// cell of the region (the ghost and halo work a box pays for its neighbours). Every box keeps
+// at least `minCells` cells along each axis (the ghost width; an axis thinner than that stays
+// whole) and every cut lies on a multiple of `granularity` cells (DEM bins spanning several
+// cells stay whole); a split is legal only where both sides can hold their ranks' boxes. A grid
+// that cannot hold `ranks` boxes at all is refused (ConfigError). No MPI: the run and `coloc
+// plan` call it alike.
 //
 // Ranks are numbered in the order of the bisection tree: the low side of every cut first.
 #pragma once
@@ -68,6 +74,12 @@ std::vector<double> tiledCellCost(const GlobalGrid& g, const TiledCostModel& m,
 /// The RCB boxes of `ranks` ranks on `cost` (one value per global cell, x fastest).
 TiledLayout tiledBoxes(const GlobalGrid& grid, const std::vector<double>& cost, int ranks,
                        const TiledOptions& opt = {});
+
+/// A floor under the largest box cost of any layout whose boxes keep at least `minCells` cells
+/// along each axis (min(minCells, N) on a thinner axis): every box holding cell c holds a box of
+/// exactly that size holding c, so it costs at least the cheapest such box; the floor is the
+/// largest of these over the cells. (Floor / mean cost: the imbalance no layout can beat.)
+double boxCostFloor(const GlobalGrid& grid, const std::vector<double>& cost, int minCells);
 
 /// Box costs and imbalance of any box layout under the same cost (the surface term included).
 void evaluateBoxes(const std::vector<double>& cost, const TiledOptions& opt, TiledLayout& l);
