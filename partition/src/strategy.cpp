@@ -110,7 +110,22 @@ TiledLayout tiledStrategy(const StrategyInput& in, const std::vector<double>& co
   opt.granularity = std::max(1, in.granularity);
   opt.surfaceCost = surfaceCost;
   opt.ghost = 2;
-  return tiledBoxes(in.grid, cost, in.ranks, opt);
+  TiledLayout best = tiledBoxes(in.grid, cost, in.ranks, opt);
+  // A separable layout is a tiled layout too: the balanced strategy's blocks are kept where they
+  // are more balanced (where whole-cell planes of the bisection divide the work worse).
+  try {
+    const BalancedLayout sep =
+        balanceBlocks(in.grid, cost, in.ranks, opt.minCells, opt.granularity, in.dims);
+    const Blocks b{sep.dims, sep.cuts};
+    TiledLayout t;
+    t.layout.grid = in.grid;
+    for (int r = 0; r < in.ranks; ++r) t.layout.box.push_back({b.lo(r), b.hi(r)});
+    evaluateBoxes(cost, opt, t);
+    if (t.maxCost < best.maxCost * (1 - 1e-3)) best = std::move(t);
+  } catch (const ConfigError&) {
+    // no process grid fits: the bisection's boxes stand
+  }
+  return best;
 }
 
 }  // namespace coloc
