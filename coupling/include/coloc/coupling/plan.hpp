@@ -53,9 +53,9 @@ struct LayoutPlan {
   Blocks fluid, particles;         // particles == fluid unless independent (empty for tiled)
   std::vector<IndexBox> boxes;     // tiled: rank r's box of cells (both physics)
   double modelledImbalance = 1.0;  // tiled: max/mean of the cost the bisection balanced
-  double imbalanceFloor = 0.0;     // tiled: boxCostFloor / mean (no layout of legal boxes does better)
-  long long substeps = 0;          // DEM sub-steps per coupling step that exchange ghosts
-  double imbalance = 1.0;          // max / mean of RankPlan::cost
+  double imbalanceFloor = 0.0;  // tiled: boxCostFloor / mean (no layout of legal boxes does better)
+  long long substeps = 0;       // DEM sub-steps per coupling step that exchange ghosts
+  double imbalance = 1.0;       // max / mean of RankPlan::cost
   std::vector<RankPlan> rank;
   std::string error;  // set when the strategy has no legal layout for this rank count
 };
