@@ -15,6 +15,8 @@ using detail::PrefixSum;
 
 // A cut along a shorter axis must beat the longer axis' best by more than rounding.
 constexpr double kTie = 1e-9;
+// Splits of a region carried out to the end before one is chosen (see Bisector::bisect).
+constexpr std::size_t kRollouts = 4;
 
 /// The recursive bisection over one cost table.
 class Bisector {
@@ -50,22 +52,57 @@ class Bisector {
                 : 0.0);
   }
 
-  void bisect(const IndexBox& box, int p, int first) {
+  /// Splits the region among ranks [first, first + p). With `rollout`, the few best splits by
+  /// score are each carried out greedily to the end and the one whose largest box is cheapest
+  /// is taken (never worse than the greedy choice, which is among them); then the same below.
+  void bisect(const IndexBox& box, int p, int first, bool rollout) {
     if (p == 1) {
       out_[static_cast<std::size_t>(first)] = box;
       return;
     }
-    // Axes, longest first (ties: x before y before z): the first of the best cuts wins.
-    std::array<int, 3> axes{0, 1, 2};
+    std::vector<Split> top;
+    splits(box, p, rollout && p > 2 ? kRollouts : 1, top);
+    if (top.empty())
+      throw ConfigError("partition.strategy", "tiled: no legal cut of a region of " +
+                                                  std::to_string(box.volume()) + " cells into " +
+                                                  std::to_string(p) + " boxes");
+    std::size_t pick = 0;
+    if (top.size() > 1) {
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t c = 0; c < top.size(); ++c) {
+        carryOut(box, p, first, top[c], false);
+        double worst = 0;
+        for (int r = first; r < first + p; ++r)
+          worst = std::max(worst, cost(out_[static_cast<std::size_t>(r)]));
+        if (worst < best * (1 - kTie)) best = worst, pick = c;
+      }
+    }
+    carryOut(box, p, first, top[pick], rollout);
+  }
+
+ private:
+  struct Split {
+    int axis = 0, at = 0, pl = 0;
+    double score = 0;
+  };
+  void carryOut(const IndexBox& box, int p, int first, const Split& s, bool rollout) {
+    IndexBox lo = box, hi = box;
+    lo.hi[s.axis] = s.at;
+    hi.lo[s.axis] = s.at;
+    bisect(lo, s.pl, first, rollout);
+    bisect(hi, p - s.pl, first + s.pl, rollout);
+  }
+  /// The `k` best splits of the region by score (ascending; ties: the first tried): every
+  /// legal plane, each with the rank split that suits it best: the halving split, or the split
+  /// nearest to the plane's share of the cost (a bed that holds most of the work gets most of
+  /// the ranks) within `reach` of halving, within what both sides can hold.
+  void splits(const IndexBox& box, int p, std::size_t k, std::vector<Split>& top) {
+    std::array<int, 3> axes{0, 1, 2};  // longest first (ties: x before y before z)
     std::stable_sort(axes.begin(), axes.end(),
                      [&](int a, int b) { return box.hi[a] - box.lo[a] > box.hi[b] - box.lo[b]; });
-    // Every legal plane, each with the rank split that suits it best: the halving split, or
-    // the split nearest to the plane's share of the cost (a bed that holds most of the work
-    // gets most of the ranks) within `reach` of halving, within what both sides can hold.
     const long long reach = static_cast<long long>(reach_ * p);
     for (int d = 0; d < 3; ++d) planes(box, d, cand_[d]);
-    int bestAxis = -1, bestAt = 0, bestPl = 0;
-    double best = std::numeric_limits<double>::infinity();
+    top.clear();
     for (int d : axes)
       for (const Plane& q : cand_[d]) {
         const long long lo = std::max<long long>(1, p - q.capHi),
@@ -77,32 +114,22 @@ class Bisector {
         if (wlo > whi) wlo = whi = std::clamp(half, lo, hi);
         const double share = q.lo + q.hi > 0 ? p * q.lo / (q.lo + q.hi) : 0.5 * p;
         const long long f = static_cast<long long>(std::floor(share));
-        for (long long pl : {static_cast<long long>(p / 2), f, f + 1}) {
+        for (long long pl : {half, f, f + 1}) {
           pl = std::clamp(pl, wlo, whi);
-          const double score =
-              std::max(q.lo / static_cast<double>(pl), q.hi / static_cast<double>(p - pl));
-          if (score < best * (1 - kTie)) {
-            best = score;
-            bestAxis = d;
-            bestAt = q.at;
-            bestPl = static_cast<int>(pl);
-          }
+          const Split s{
+              d, q.at, static_cast<int>(pl),
+              std::max(q.lo / static_cast<double>(pl), q.hi / static_cast<double>(p - pl))};
+          bool seen = false;
+          for (const Split& t : top) seen = seen || (t.axis == d && t.at == s.at && t.pl == s.pl);
+          if (seen) continue;
+          auto at = top.begin();
+          while (at != top.end() && !(s.score < at->score * (1 - kTie))) ++at;
+          if (static_cast<std::size_t>(at - top.begin()) >= k) continue;
+          top.insert(at, s);
+          if (top.size() > k) top.pop_back();
         }
       }
-    if (bestAxis >= 0) {
-      IndexBox lo = box, hi = box;
-      lo.hi[bestAxis] = bestAt;
-      hi.lo[bestAxis] = bestAt;
-      bisect(lo, bestPl, first);
-      bisect(hi, p - bestPl, first + bestPl);
-      return;
-    }
-    throw ConfigError("partition.strategy", "tiled: no legal cut of a region of " +
-                                                std::to_string(box.volume()) + " cells into " +
-                                                std::to_string(p) + " boxes");
   }
-
- private:
   /// A plane along an axis: where, the cost of both sides, how many boxes each side holds.
   struct Plane {
     int at = 0;
@@ -264,7 +291,7 @@ TiledLayout tiledBoxes(const GlobalGrid& grid, const std::vector<double>& cost, 
                         "tiled: the grid holds at most " + std::to_string(bis.capacity(all)) +
                             " boxes of at least " + std::to_string(opt.minCells) +
                             " cells a side, not " + std::to_string(ranks));
-    bis.bisect(all, ranks, 0);
+    bis.bisect(all, ranks, 0, /*rollout=*/true);
     Tried t{0, 0, boxes};
     for (const auto& b : boxes) {
       t.worst = std::max(t.worst, bis.cost(b));

@@ -61,12 +61,15 @@ void checkLayout(const TiledLayout& l, int ranks, const TiledOptions& opt) {
 
 }  // namespace
 
-TEST(Tiled, EveryCellOnceForEveryRankCountUpTo1024) {
+TEST(Tiled, EveryCellOnceForEveryRankCountUpTo256AndPrimesTo1021) {
   GlobalGrid g;
   g.cells = {40, 24, 36};  // capacity 20 x 12 x 18 boxes of 2 cells
   const auto cost = cornerBlob(g, 50.0);
   const TiledOptions opt;
-  for (int p = 1; p <= 1024; ++p) {
+  std::vector<int> counts;
+  for (int p = 1; p <= 256; ++p) counts.push_back(p);
+  for (int p : {257, 509, 512, 521, 769, 1000, 1021, 1024}) counts.push_back(p);
+  for (const int p : counts) {
     const auto l = tiledBoxes(g, cost, p, opt);
     checkLayout(l, p, opt);
     if (HasFatalFailure()) FAIL() << p << " ranks";

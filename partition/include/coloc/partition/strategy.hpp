@@ -75,7 +75,8 @@ StrategyBlocks chooseBlocks(const std::string& strategy, const StrategyInput& in
 /// The tiled strategy's boxes on `cost` (one value per global cell): the balanced strategy's
 /// thinnest block (max(2, minCells)) and granularity; `surfaceCost` per halo cell of a box
 /// (2 layers, the fluid's ghosts). The bisection's boxes, or the balanced strategy's blocks as
-/// boxes where their largest cost is lower by more than 0.1 %. Throws ConfigError.
+/// boxes where their largest cost is lower by more than 0.1 %, or within 0.1 % with fewer halo
+/// cells. Throws ConfigError.
 TiledLayout tiledStrategy(const StrategyInput& in, const std::vector<double>& cost,
                           double surfaceCost = 0.0);
 
