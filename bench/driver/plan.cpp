@@ -43,9 +43,9 @@ int planCase(const PlanOptions& opts) {
   std::vector<std::string> strategies = opts.strategies;
   if (strategies.empty()) strategies = {"uniform", "balanced", "independent"};
   for (const auto& s : strategies)
-    if (s != "uniform" && s != "balanced" && s != "independent")
+    if (s != "uniform" && s != "balanced" && s != "independent" && s != "tiled")
       throw ConfigError("partition.strategy", "--strategy: unknown strategy '" + s +
-                                                  "' (uniform, balanced, independent)");
+                                                  "' (uniform, balanced, independent, tiled)");
   const auto ranks = parseRankList(opts.ranks);
   const std::string outDir =
       opts.outDir.empty() ? (std::filesystem::path("out") / cfg.string("name") / "plan").string()
@@ -78,10 +78,20 @@ int planCase(const PlanOptions& opts) {
       const auto dims = [](const Blocks& b) {
         return Json::array({b.dims[0], b.dims[1], b.dims[2]});
       };
-      j["fluid_dims"] = dims(L.fluid);
-      j["particle_dims"] = dims(L.particles);
-      j["fluid_cuts"] = {L.fluid.cuts[0], L.fluid.cuts[1], L.fluid.cuts[2]};
-      j["particle_cuts"] = {L.particles.cuts[0], L.particles.cuts[1], L.particles.cuts[2]};
+      const bool tiled = !L.boxes.empty();
+      if (tiled) {  // one box per rank, no process grid: [lo x, y, z, hi x, y, z] a rank
+        Json boxes = Json::array();
+        for (const auto& b : L.boxes)
+          boxes.push_back(Json::array({b.lo[0], b.lo[1], b.lo[2], b.hi[0], b.hi[1], b.hi[2]}));
+        j["boxes"] = boxes;
+        j["modelled_imbalance"] = L.modelledImbalance;
+        j["imbalance_floor"] = L.imbalanceFloor;
+      } else {
+        j["fluid_dims"] = dims(L.fluid);
+        j["particle_dims"] = dims(L.particles);
+        j["fluid_cuts"] = {L.fluid.cuts[0], L.fluid.cuts[1], L.fluid.cuts[2]};
+        j["particle_cuts"] = {L.particles.cuts[0], L.particles.cuts[1], L.particles.cuts[2]};
+      }
       j["dem_substeps_per_step"] = L.substeps;
       j["imbalance"] = L.imbalance;
       Json per = Json::object();
@@ -117,6 +127,11 @@ int planCase(const PlanOptions& opts) {
       per["ghost_cells"] = gc;
       per["dem_ghosts"] = dg;
       per["cost"] = cost;
+      if (tiled) {
+        std::vector<long long> nb;
+        for (const auto& R : L.rank) nb.push_back(R.haloNeighbours);
+        per["halo_neighbours"] = nb;
+      }
       Json kinds = Json::object(), totals = Json::object();
       for (std::size_t t = 0; t < kTrafficNames.size(); ++t) {
         const std::string name(kTrafficNames[t]);
@@ -133,6 +148,10 @@ int planCase(const PlanOptions& opts) {
       std::snprintf(fd, sizeof fd, "%dx%dx%d", L.fluid.dims[0], L.fluid.dims[1], L.fluid.dims[2]);
       std::snprintf(dd, sizeof dd, "%dx%dx%d", L.particles.dims[0], L.particles.dims[1],
                     L.particles.dims[2]);
+      if (tiled) {
+        std::snprintf(fd, sizeof fd, "boxes");
+        std::snprintf(dd, sizeof dd, "boxes");
+      }
       std::printf("%-12s %6d %-10s %-10s %9.3f %12lld %12lld %12.3f %12.3f %12.3f\n",
                   strategy.c_str(), n, fd, dd, L.imbalance, maxCells, maxParts,
                   mb(sumB[FH] + sumB[CH]), mb(sumB[DG]), mb(sumB[DS] + sumB[PX]));

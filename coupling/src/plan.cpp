@@ -5,6 +5,7 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/coupling/simulation.hpp"
+#include "coloc/partition/box_halo.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -89,6 +90,162 @@ long long substepsPerStep(const Config& cfg, RunMode mode) {
   return 0;
 }
 
+/// Traffic of `times` halo operations of `fields` fields (ghost layers, staggering) on a box
+/// layout, as BoxHaloPlan books it: a gather sends, from each owner, the pieces of its
+/// neighbours' ghost regions it owns, one message per neighbour; a reverse sum the opposite.
+/// Pieces a rank owns itself (periodic images, its own wall ghosts) stay in memory.
+void boxHalo(const BoxLayout& L, int ghost, Int3 stagger, int fields, bool reverse, long long times,
+             Traffic kind, std::vector<RankPlan>& rank) {
+  std::vector<int> peers;
+  for (int r = 0; r < L.size(); ++r) {
+    peers.clear();
+    for (const auto& p : haloPieces(L, r, ghost, stagger)) {
+      if (p.owner == r) continue;
+      const int sender = reverse ? r : p.owner;
+      rank[static_cast<std::size_t>(sender)].perStep[k(kind)].bytes +=
+          times * p.src.volume() * fields * kDouble;
+      if (std::find(peers.begin(), peers.end(), p.owner) == peers.end()) peers.push_back(p.owner);
+    }
+    for (int q : peers)
+      rank[static_cast<std::size_t>(reverse ? r : q)].perStep[k(kind)].messages += times;
+  }
+}
+
+/// The tiled strategy: one box per rank for both physics.
+LayoutPlan planTiled(const PlanCase& pc, int ranks) {
+  const Config& cfg = *pc.cfg;
+  const GlobalGrid& g = pc.grid;
+  LayoutPlan out;
+  out.strategy = "tiled";
+  out.ranks = ranks;
+  const bool fluidOn = pc.mode != RunMode::ParticlesOnly;
+  const bool demOn = pc.mode != RunMode::FluidOnly;
+  const bool coupled = pc.mode == RunMode::Coupled || pc.mode == RunMode::DummyDem;
+  BoxLayout L;
+  dem::BinLayout bins;
+  try {
+    const StrategyInput in = strategyInput(cfg, ranks);
+    const TiledLayout t = tiledStrategy(in, pc.cost, cfg.number("partition.cost.halo_cell"));
+    L = t.layout;
+    out.boxes = L.box;
+    out.modelledImbalance = t.imbalance();
+    if (t.avgCost > 0)
+      out.imbalanceFloor = boxCostFloor(g, pc.cost, std::max(2, in.minCells)) / t.avgCost;
+    if (demOn)
+      bins = dem::binLayout(cfg, g, L.cutPlanes(), pc.particles.dmax, pc.particles.skin,
+                            pc.particles.total);
+  } catch (const Error& e) {
+    out.error = e.what();
+    return out;
+  }
+  out.substeps = substepsPerStep(cfg, pc.mode);
+  out.rank.assign(static_cast<std::size_t>(ranks), RankPlan{});
+  for (int r = 0; r < ranks; ++r) {
+    auto& R = out.rank[static_cast<std::size_t>(r)];
+    R.cells = L.box[static_cast<std::size_t>(r)].volume();
+    if (!fluidOn) continue;
+    R.ghostCells = haloRemoteCells(L, r, kFluidGhost);
+    R.haloNeighbours = static_cast<int>(haloNeighbours(L, r, kFluidGhost).size());
+  }
+  if (fluidOn) {
+    // The schedule of planLayout (fv::FluidSolver::step, Simulation::step).
+    auto& rk = out.rank;
+    boxHalo(L, kFluidGhost, {0, 0, 0}, 6, false, 1, Traffic::FluidHalo, rk);
+    boxHalo(L, kFluidGhost, {0, 0, 0}, 1, false, 1, Traffic::FluidHalo, rk);
+    for (int c = 0; c < 3; ++c) {
+      Int3 s{0, 0, 0};
+      s[c] = 1;
+      boxHalo(L, kFluidGhost, s, 1, false, coupled ? 3 : 2, Traffic::FluidHalo, rk);
+    }
+    if (coupled) {
+      boxHalo(L, kFluidGhost, {0, 0, 0}, 3, false, 1, Traffic::FluidHalo, rk);
+      boxHalo(L, kCouplingGhost, {0, 0, 0}, 5, true, 1, Traffic::DepositSum, rk);
+    }
+  }
+  const double wc = cfg.number("partition.cost.cell"), wp = cfg.number("partition.cost.particle");
+  if (demOn) {
+    const std::vector<int> cellOwner = L.ownerMap();
+    const auto& X = pc.particles.x;
+    const std::size_t N = X[0].size();
+    std::vector<std::array<double, 3>> lo(static_cast<std::size_t>(ranks)),
+        hi(static_cast<std::size_t>(ranks));
+    for (int r = 0; r < ranks; ++r)
+      for (int d = 0; d < 3; ++d) {
+        const IndexBox& b = L.box[static_cast<std::size_t>(r)];
+        lo[static_cast<std::size_t>(r)][d] = bins.lo(g, d, bins.blockBinLo(d, b.lo[d]));
+        hi[static_cast<std::size_t>(r)][d] = bins.hi(g, d, bins.blockBinLo(d, b.hi[d]));
+      }
+    const auto ownerOfCell = [&](const Int3& c) {
+      return cellOwner[static_cast<std::size_t>(c[0] + g.cells[0] * (c[1] + g.cells[1] * c[2]))];
+    };
+    const double rc = pc.particles.range;
+    std::vector<std::vector<int>> dests(static_cast<std::size_t>(ranks));
+    std::vector<int> cand;
+    for (std::size_t i = 0; i < N; ++i) {
+      Int3 c{};
+      for (int d = 0; d < 3; ++d) c[d] = bins.cellOfBin(d, bins.binOf(g, d, X[d][i]));
+      const int q = ownerOfCell(c);
+      auto& Q = out.rank[static_cast<std::size_t>(q)];
+      ++Q.particles;
+      if (coupled) Q.perStep[k(Traffic::ForceHandover)].bytes += kForceRow * kDouble;
+      // Ghosts: every box (periodic images included) whose range-widened bounds hold the
+      // particle; the owner's own image at shift 0 is the particle itself.
+      std::array<std::array<double, 3>, 3> shifts{};
+      std::array<int, 3> nShift{};
+      for (int d = 0; d < 3; ++d) {
+        shifts[d][nShift[d]++] = 0.0;
+        if (!g.periodic[d]) continue;
+        if (X[d][i] < g.origin[d] + rc) shifts[d][nShift[d]++] = g.length[d];
+        if (X[d][i] >= g.origin[d] + g.length[d] - rc) shifts[d][nShift[d]++] = -g.length[d];
+      }
+      for (int a = 0; a < nShift[0]; ++a)
+        for (int b = 0; b < nShift[1]; ++b)
+          for (int e = 0; e < nShift[2]; ++e) {
+            const double y[3] = {X[0][i] + shifts[0][a], X[1][i] + shifts[1][b],
+                                 X[2][i] + shifts[2][e]};
+            const bool image = a + b + e > 0;
+            Int3 c0{}, c1{};
+            for (int d = 0; d < 3; ++d) {
+              c0[d] = cellAlong(g, d, y[d] - rc);
+              c1[d] = cellAlong(g, d, y[d] + rc);
+            }
+            cand.clear();
+            for (int kk = c0[2]; kk <= c1[2]; ++kk)
+              for (int jj = c0[1]; jj <= c1[1]; ++jj)
+                for (int ii = c0[0]; ii <= c1[0]; ++ii) {
+                  const int r = ownerOfCell({ii, jj, kk});
+                  if (std::find(cand.begin(), cand.end(), r) == cand.end()) cand.push_back(r);
+                }
+            for (int r : cand) {
+              if (r == q && !image) continue;
+              bool in = true;
+              for (int d = 0; d < 3 && in; ++d)
+                in = y[d] >= lo[static_cast<std::size_t>(r)][d] - rc &&
+                     y[d] < hi[static_cast<std::size_t>(r)][d] + rc;
+              if (!in) continue;
+              ++out.rank[static_cast<std::size_t>(r)].demGhosts;
+              if (r == q) continue;
+              Q.perStep[k(Traffic::DemGhost)].bytes += out.substeps * kGhostUpdate * kDouble;
+              auto& dq = dests[static_cast<std::size_t>(q)];
+              if (std::find(dq.begin(), dq.end(), r) == dq.end()) dq.push_back(r);
+            }
+          }
+    }
+    for (int q = 0; q < ranks; ++q)
+      out.rank[static_cast<std::size_t>(q)].perStep[k(Traffic::DemGhost)].messages +=
+          out.substeps * static_cast<long long>(dests[static_cast<std::size_t>(q)].size());
+  }
+  double sum = 0, mx = 0;
+  for (auto& R : out.rank) {
+    R.cost = (fluidOn ? wc * static_cast<double>(R.cells) : 0.0) +
+             (demOn ? wp * static_cast<double>(R.particles) : 0.0);
+    sum += R.cost;
+    mx = std::max(mx, R.cost);
+  }
+  out.imbalance = sum > 0 ? mx / (sum / ranks) : 1.0;
+  return out;
+}
+
 }  // namespace
 
 PlanCase planCase(const Config& cfg) {
@@ -117,6 +274,7 @@ PlanCase planCase(const Config& cfg) {
 }
 
 LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks) {
+  if (strategy == "tiled") return planTiled(pc, ranks);
   const Config& cfg = *pc.cfg;
   const GlobalGrid& g = pc.grid;
   LayoutPlan out;

@@ -20,6 +20,10 @@ void declareDomainConfig(Schema& s) {
            Range::nonNegative());
   s.number("partition.cost.particle", 2.0, "balanced: modelled cost of a particle per step",
            Range::nonNegative());
+  s.number("partition.cost.halo_cell", 0.0,
+           "tiled (coloc plan): modelled cost of a halo cell of a box per step (ghost and halo "
+           "work; the surface term of the bisection)",
+           Range::nonNegative());
   s.integer("partition.calibrate_steps", 0,
             "balanced: measure the two costs over this many steps on uniform blocks first "
             "(0: use partition.cost.*)",

@@ -103,4 +103,38 @@ StrategyBlocks chooseBlocks(const std::string& strategy, const StrategyInput& in
   return out;
 }
 
+TiledLayout tiledStrategy(const StrategyInput& in, const std::vector<double>& cost,
+                          double surfaceCost) {
+  TiledOptions opt;
+  opt.minCells = std::max(2, in.minCells);
+  opt.granularity = std::max(1, in.granularity);
+  opt.surfaceCost = surfaceCost;
+  opt.ghost = 2;
+  TiledLayout best = tiledBoxes(in.grid, cost, in.ranks, opt);
+  // A separable layout is a tiled layout too: the balanced strategy's blocks are kept where they
+  // are more balanced, or as balanced (0.1 %) with fewer halo cells.
+  try {
+    const BalancedLayout sep =
+        balanceBlocks(in.grid, cost, in.ranks, opt.minCells, opt.granularity, in.dims);
+    const Blocks b{sep.dims, sep.cuts};
+    TiledLayout t;
+    t.layout.grid = in.grid;
+    for (int r = 0; r < in.ranks; ++r) t.layout.box.push_back({b.lo(r), b.hi(r)});
+    evaluateBoxes(cost, opt, t);
+    // as tiledBoxes chooses among its own layouts: cheapest largest box, within 0.1 % fewest
+    // halo cells
+    const auto halo = [&](const TiledLayout& x) {
+      long long h = 0;
+      for (const auto& b : x.layout.box) h += haloCells(in.grid, b, opt.ghost);
+      return h;
+    };
+    if (t.maxCost < best.maxCost * (1 - 1e-3) ||
+        (t.maxCost <= best.maxCost * (1 + 1e-3) && halo(t) < halo(best)))
+      best = std::move(t);
+  } catch (const ConfigError&) {
+    // no process grid fits: the bisection's boxes stand
+  }
+  return best;
+}
+
 }  // namespace coloc

@@ -9,6 +9,11 @@
 // fields) mirrors fv::FluidSolver::step and Simulation::step; the exactness test (tests/coupling/
 // test_plan_exact.cpp) compares it with the ledger of real runs, kind by kind.
 //
+// The tiled strategy (partition/tiled.hpp) has no runtime yet: its plan counts what the general
+// box halo (partition/box_halo.hpp: one message per neighbour box, pieces of the ghost region)
+// and DEM ghosts sent to every box within the interaction range would send, with the same halo
+// schedule per step; it is not checked against a run.
+//
 // Not modelled per step: DEM migration and ghost rebuilds (they follow the particles' motion;
 // a first step from rest has none), hypre's own messages inside the pressure solve, collectives.
 #pragma once
@@ -38,15 +43,19 @@ struct RankPlan {
   long long ghostCells = 0;  // cells received by one gather of one cell field (2 layers)
   long long demGhosts = 0;   // DEM ghost particles (received at a ghost build)
   double cost = 0;           // modelled cost: partition.cost.cell x cells + .particle x particles
+  int haloNeighbours = 0;    // tiled: ranks one gather of a 2-layer cell field receives from
   std::array<TrafficCount, kTrafficKinds> perStep{};  // what this rank books in one step
 };
 
 struct LayoutPlan {
   std::string strategy;
   int ranks = 0;
-  Blocks fluid, particles;  // particles == fluid unless independent
-  long long substeps = 0;   // DEM sub-steps per coupling step that exchange ghosts
-  double imbalance = 1.0;   // max / mean of RankPlan::cost
+  Blocks fluid, particles;         // particles == fluid unless independent (empty for tiled)
+  std::vector<IndexBox> boxes;     // tiled: rank r's box of cells (both physics)
+  double modelledImbalance = 1.0;  // tiled: max/mean of the cost the bisection balanced
+  double imbalanceFloor = 0.0;  // tiled: boxCostFloor / mean (no layout of legal boxes does better)
+  long long substeps = 0;       // DEM sub-steps per coupling step that exchange ghosts
+  double imbalance = 1.0;       // max / mean of RankPlan::cost
   std::vector<RankPlan> rank;
   std::string error;  // set when the strategy has no legal layout for this rank count
 };
@@ -61,8 +70,9 @@ struct PlanCase {
 };
 PlanCase planCase(const Config& cfg);
 
-/// The layout `strategy` would choose on `ranks` ranks and its per-rank work and traffic.
-/// Errors of the layout (no legal grid, bins that do not fit) land in LayoutPlan::error.
+/// The layout `strategy` would choose (uniform, balanced, independent, tiled) on `ranks` ranks and
+/// its per-rank work and traffic. Errors of the layout (no legal grid, bins that do not fit) land
+/// in LayoutPlan::error.
 LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks);
 
 }  // namespace coloc::coupling

@@ -6,7 +6,10 @@
 //   uniform      chooseDims (MPI_Dims_create's grid where legal) and even cuts;
 //   balanced     balanceBlocks on the modelled cost of every cell (partition/balance.hpp);
 //   independent  the fluid on the uniform blocks, the DEM on blocks balanced by particle count,
-//                on a process grid other than the fluid's when one fits.
+//                on a process grid other than the fluid's when one fits;
+//   tiled        one box per rank by recursive bisection of the modelled cost (partition/
+//                tiled.hpp): no process grid, so not Blocks (tiledStrategy). `coloc plan`
+//                evaluates it; runs do not take it yet (chooseBlocks refuses it).
 //
 // Ranks are numbered as MPI_Cart_create numbers them without reordering: row-major over the
 // block coordinates, z fastest.
@@ -19,6 +22,7 @@
 
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/decomposition.hpp"
+#include "coloc/partition/tiled.hpp"
 
 namespace coloc {
 
@@ -67,6 +71,14 @@ Blocks uniformBlocks(const StrategyInput& in);
 /// either may be empty where the strategy does not read it. Throws ConfigError.
 StrategyBlocks chooseBlocks(const std::string& strategy, const StrategyInput& in,
                             const std::vector<double>& cost, const std::vector<double>& count);
+
+/// The tiled strategy's boxes on `cost` (one value per global cell): the balanced strategy's
+/// thinnest block (max(2, minCells)) and granularity; `surfaceCost` per halo cell of a box
+/// (2 layers, the fluid's ghosts). The bisection's boxes, or the balanced strategy's blocks as
+/// boxes where their largest cost is lower by more than 0.1 %, or within 0.1 % with fewer halo
+/// cells. Throws ConfigError.
+TiledLayout tiledStrategy(const StrategyInput& in, const std::vector<double>& cost,
+                          double surfaceCost = 0.0);
 
 /// Blocks of a live decomposition.
 Blocks blocksOf(const Decomposition& dec);
