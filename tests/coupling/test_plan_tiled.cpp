@@ -95,7 +95,9 @@ TEST_P(PlanTiled, BoxesTileAndHaloTrafficEqualsTheBoxPlan) {
     EXPECT_EQ(R.perStep[k].messages, timers.messages(t))
         << "rank " << me << " " << kTrafficNames[k];
   }
-  if (world.size() > 1) EXPECT_GT(world.sum(timers.bytes(Traffic::DepositSum)), 0);
+  if (world.size() > 1) {
+    EXPECT_GT(world.sum(timers.bytes(Traffic::DepositSum)), 0);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, PlanTiled, ::testing::Values(kBed, kPeriodic));
