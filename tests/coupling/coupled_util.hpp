@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "coloc/coupling/simulation.hpp"
 
@@ -41,6 +43,44 @@ inline ParticleState particleState(coupling::Simulation& sim, std::int64_t id) {
   }
   s.found = buf[9] == 1.0;
   return s;
+}
+
+/// The re-balancing tests' case: `count` spheres settling in the lower quarter of a tall closed
+/// box with an outlet on top (even blocks cut it along z: the upper blocks hold no particles),
+/// balanced blocks; `partition` adds keys to the partition object (e.g. a re-balance interval).
+inline std::string settlingBedCase(int count, int steps, const std::string& partition = "") {
+  return R"({
+  "domain": { "length": [0.06, 0.04, 0.12], "cells": [6, 4, 12] },
+  "gravity": [0.0, 0.0, -9.81],
+  "partition": { "strategy": "balanced")" +
+         (partition.empty() ? "" : ", " + partition) + R"( },
+  "run": { "steps": )" +
+         std::to_string(steps) + R"( },
+  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-3,
+             "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 } },
+             "pressure": { "tol": 1e-13 } },
+  "particles": { "dt": 5e-5,
+    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3, "friction": 0.5 } ],
+    "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.058, 0.038, 0.03],
+                   "count": )" +
+         std::to_string(count) + R"(, "radius": 0.0014, "velocity_spread": 0.05 } ] },
+  "coupling": { "drag": "difelice" }
+})";
+}
+
+/// The same process grid with every interior cut one cell lower where the blocks allow it (a
+/// re-balance target that moves cells and particles between every pair of neighbours).
+inline coupling::Layouts shiftedLayouts(const Decomposition& dec) {
+  auto cuts = dec.cuts();
+  for (auto& c : cuts)
+    for (std::size_t b = 1; b + 1 < c.size(); ++b)
+      if (c[b] - 1 - c[b - 1] >= 2) c[b] -= 1;
+  return {Decomposition::fromCuts(dec.comm(), dec.grid(), cuts),
+          std::nullopt,
+          "balanced",
+          CostModel{},
+          1.0,
+          1.0};
 }
 
 }  // namespace coloc::test

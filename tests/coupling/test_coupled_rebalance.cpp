@@ -21,20 +21,8 @@ constexpr int kCount = 800;
 
 // A bed settling in the lower quarter of a tall closed box with an outlet on top (even blocks
 // cut it along z: the upper blocks have no particles).
-const char* kCase = R"({
-  "domain": { "length": [0.06, 0.04, 0.12], "cells": [6, 4, 12] },
-  "gravity": [0.0, 0.0, -9.81],
-  "partition": { "strategy": "balanced", "rebalance_interval": 10, "rebalance_threshold": 1.02 },
-  "run": { "steps": 30 },
-  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-3,
-             "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 } },
-             "pressure": { "tol": 1e-13 } },
-  "particles": { "dt": 5e-5,
-    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3, "friction": 0.5 } ],
-    "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.058, 0.038, 0.03],
-                   "count": 800, "radius": 0.0014, "velocity_spread": 0.05 } ] },
-  "coupling": { "drag": "difelice" }
-})";
+const std::string kCase =
+    test::settlingBedCase(kCount, 30, R"("rebalance_interval": 10, "rebalance_threshold": 1.02)");
 
 /// Every particle's position and velocity by global id, on every rank.
 std::vector<double> trajectories(coupling::Simulation& sim) {

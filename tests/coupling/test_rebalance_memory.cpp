@@ -17,20 +17,7 @@ namespace {
 
 constexpr int kCount = 400;
 
-const char* kCase = R"({
-  "domain": { "length": [0.06, 0.04, 0.12], "cells": [6, 4, 12] },
-  "gravity": [0.0, 0.0, -9.81],
-  "partition": { "strategy": "balanced" },
-  "run": { "steps": 20 },
-  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-3,
-             "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 } },
-             "pressure": { "tol": 1e-13 } },
-  "particles": { "dt": 5e-5,
-    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3, "friction": 0.5 } ],
-    "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.058, 0.038, 0.03],
-                   "count": 400, "radius": 0.0014, "velocity_spread": 0.05 } ] },
-  "coupling": { "drag": "difelice" }
-})";
+const std::string kCase = test::settlingBedCase(kCount, 20);
 
 std::vector<double> trajectories(coupling::Simulation& sim) {
   std::vector<double> s(9 * kCount, 0.0);
@@ -76,20 +63,6 @@ std::vector<double> fluidValues(coupling::Simulation& sim) {
   return v;
 }
 
-coupling::Layouts shifted(const Decomposition& dec) {
-  // The same process grid with every interior cut one cell lower where the blocks allow it.
-  auto cuts = dec.cuts();
-  for (auto& c : cuts)
-    for (std::size_t b = 1; b + 1 < c.size(); ++b)
-      if (c[b] - 1 - c[b - 1] >= 2) c[b] -= 1;
-  return {Decomposition::fromCuts(dec.comm(), dec.grid(), cuts),
-          std::nullopt,
-          "balanced",
-          CostModel{},
-          1.0,
-          1.0};
-}
-
 }  // namespace
 
 TEST(RebalanceInMemory, SameStateAsThroughTheFile) {
@@ -111,7 +84,8 @@ TEST(RebalanceInMemory, SameStateAsThroughTheFile) {
   }
   ASSERT_EQ(trajectories(*a), trajectories(*b));
   // The layouts first: the call takes the pointer by value.
-  coupling::Layouts la = shifted(a->decomposition()), lb = shifted(b->decomposition());
+  coupling::Layouts la = test::shiftedLayouts(a->decomposition()),
+                    lb = test::shiftedLayouts(b->decomposition());
   a = coupling::applyRebalance(std::move(a), cfg, std::move(la));
   b = coupling::applyRebalanceThroughFile(std::move(b), cfg, std::move(lb), scratch);
   EXPECT_FALSE(std::filesystem::exists(scratch));

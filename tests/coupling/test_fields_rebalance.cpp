@@ -9,25 +9,13 @@
 #include "coloc/coupling/simulation.hpp"
 #include "coloc/dem/fields.hpp"
 #include "coloc/partition/setup.hpp"
+#include "coupled_util.hpp"
 
 using namespace coloc;
 
 namespace {
 
-const char* kCase = R"({
-  "domain": { "length": [0.06, 0.04, 0.12], "cells": [6, 4, 12] },
-  "gravity": [0.0, 0.0, -9.81],
-  "partition": { "strategy": "balanced" },
-  "run": { "steps": 16 },
-  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-3,
-             "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 } },
-             "pressure": { "tol": 1e-13 } },
-  "particles": { "dt": 5e-5,
-    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3, "friction": 0.5 } ],
-    "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.058, 0.038, 0.03],
-                   "count": 400, "radius": 0.0014, "velocity_spread": 0.05 } ] },
-  "coupling": { "drag": "difelice" }
-})";
+const std::string kCase = test::settlingBedCase(400, 16);
 
 /// Particles (owned, and ghosts for the fields that reach them) whose extra values are not
 /// those set from their id.
@@ -43,25 +31,11 @@ long wrong(const dem::ParticleStore& p) {
   return bad;
 }
 
-coupling::Layouts shifted(const Decomposition& dec) {
-  // The same process grid with every interior cut one cell lower where the blocks allow it.
-  auto cuts = dec.cuts();
-  for (auto& c : cuts)
-    for (std::size_t b = 1; b + 1 < c.size(); ++b)
-      if (c[b] - 1 - c[b - 1] >= 2) c[b] -= 1;
-  return {Decomposition::fromCuts(dec.comm(), dec.grid(), cuts),
-          std::nullopt,
-          "balanced",
-          CostModel{},
-          1.0,
-          1.0};
-}
-
 }  // namespace
 
 TEST(ParticleFields, SurviveInMemoryRebalance) {
   const Comm world = Comm::world();
-  const Config cfg = Config::fromText(kCase, "test", {}, coupling::caseSchema());
+  const Config cfg = test::caseFromText(kCase);
   auto sim = std::make_unique<coupling::Simulation>(
       cfg, coupling::Layouts{decompositionFromConfig(world, cfg), std::nullopt, "balanced",
                              CostModel{}, 1.0, 1.0});
@@ -78,7 +52,7 @@ TEST(ParticleFields, SurviveInMemoryRebalance) {
   for (int s = 0; s < 8; ++s) sim->step();
   ASSERT_EQ(world.sum(wrong(sim->particles()->particles())), 0);
   const long long count = sim->particles()->globalCount();
-  coupling::Layouts to = shifted(sim->decomposition());
+  coupling::Layouts to = test::shiftedLayouts(sim->decomposition());
   const auto cutsBefore = sim->decomposition().cuts();
   sim = coupling::applyRebalance(std::move(sim), cfg, std::move(to));
   if (world.size() > 1) {
