@@ -83,4 +83,51 @@ inline coupling::Layouts shiftedLayouts(const Decomposition& dec) {
           1.0};
 }
 
+/// The Ergun bed tests' measurement: the mean pressure (kinematic) and fluid fraction of each
+/// global x-layer of cells (`cellsPerLayer` cells each), and over layers i0..i1 the
+/// least-squares slope of the pressure (1/m, times rho for Pa/m) and the mean fraction.
+struct LayerGradient {
+  double slope = 0, eps = 0;
+};
+inline LayerGradient layerGradient(coupling::Simulation& sim, int i0, int i1,
+                                   double cellsPerLayer) {
+  const auto& dec = sim.decomposition();
+  const auto& f = sim.fluid()->fields();
+  const int nx = dec.grid().cells[0];
+  const double h = dec.grid().spacing(0);
+  std::vector<double> layer(2 * static_cast<std::size_t>(nx), 0.0);
+  forEach(f.p.interior(), [&](int i, int j, int k) {
+    layer[static_cast<std::size_t>(dec.lo()[0] + i)] += f.p(i, j, k) / cellsPerLayer;
+    layer[static_cast<std::size_t>(nx + dec.lo()[0] + i)] += f.eps(i, j, k) / cellsPerLayer;
+  });
+  dec.comm().sumInPlace(std::span<double>(layer));
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  LayerGradient g;
+  const int n = i1 - i0 + 1;
+  for (int i = i0; i <= i1; ++i) {
+    const double x = (i + 0.5) * h, y = layer[static_cast<std::size_t>(i)];
+    sx += x, sy += y, sxx += x * x, sxy += x * y;
+    g.eps += layer[static_cast<std::size_t>(nx + i)] / n;
+  }
+  g.slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  return g;
+}
+
+/// The planner tests' bed: a layered bed in a closed box, gas from below (coupled, DEM ghosts
+/// every sub-step).
+inline const char* const kLayeredBedCase = R"({
+  "domain": { "length": [0.16, 0.04, 0.16], "cells": [16, 4, 16] },
+  "gravity": [0.0, 0.0, -9.81],
+  "run": { "mode": "coupled", "steps": 1 },
+  "fluid": { "nu": 1.5e-5, "rho": 1.2, "dt": 5e-4,
+             "boundary": { "zlo": { "type": "inlet", "velocity": [0.0, 0.0, 0.3], "superficial": true },
+                           "zhi": { "type": "outlet", "pressure": 0.0 } } },
+  "particles": {
+    "dt": 5e-5,
+    "materials": [ { "density": 2500.0, "young": 1e6, "poisson": 0.3 } ],
+    "sources": [ { "type": "layered", "lo": [0.0, 0.0, 0.0], "hi": [0.16, 0.04, 0.05],
+                   "count": 1500, "radius": 0.002 } ]
+  }
+})";
+
 }  // namespace coloc::test

@@ -45,26 +45,10 @@ TEST_P(Ergun, BedPressureGradient) {
   const Config cfg = test::caseFromText(bedCase(u));
   coupling::Simulation sim(Comm::world(), cfg);
   while (!sim.finished()) sim.step();
-  // Mean pressure and fluid fraction of each global x-layer of cells.
-  const auto& dec = sim.decomposition();
-  const auto& f = sim.fluid()->fields();
-  const int nx = dec.grid().cells[0];
-  std::vector<double> layer(2 * static_cast<std::size_t>(nx), 0.0);
-  forEach(f.p.interior(), [&](int i, int j, int k) {
-    layer[static_cast<std::size_t>(dec.lo()[0] + i)] += f.p(i, j, k) / 16.0;
-    layer[static_cast<std::size_t>(nx + dec.lo()[0] + i)] += f.eps(i, j, k) / 16.0;
-  });
-  dec.comm().sumInPlace(std::span<double>(layer));
   // Least-squares slope over the bed interior (cells 12..17; the bed spans cells 10..19).
-  const double h = 0.004;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0, eps = 0;
-  const int i0 = 12, i1 = 17, n = i1 - i0 + 1;
-  for (int i = i0; i <= i1; ++i) {
-    const double x = (i + 0.5) * h, y = layer[static_cast<std::size_t>(i)];
-    sx += x, sy += y, sxx += x * x, sxy += x * y;
-    eps += layer[static_cast<std::size_t>(nx + i)] / n;
-  }
-  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  const test::LayerGradient lg = test::layerGradient(sim, 12, 17, 16.0);
+  const double slope = lg.slope, eps = lg.eps;
+  const auto& dec = sim.decomposition();
   const double measured = -kRho * slope;
   const double ergun = 150.0 * kMu * (1 - eps) * (1 - eps) * u / (eps * eps * eps * kD * kD) +
                        1.75 * kRho * (1 - eps) * u * u / (eps * eps * eps * kD);

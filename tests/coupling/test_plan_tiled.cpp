@@ -15,20 +15,7 @@ using namespace coloc;
 namespace {
 
 // A layered bed in a closed box (test_plan_exact's), and a box periodic along x.
-const char* kBed = R"({
-  "domain": { "length": [0.16, 0.04, 0.16], "cells": [16, 4, 16] },
-  "gravity": [0.0, 0.0, -9.81],
-  "run": { "mode": "coupled", "steps": 1 },
-  "fluid": { "nu": 1.5e-5, "rho": 1.2, "dt": 5e-4,
-             "boundary": { "zlo": { "type": "inlet", "velocity": [0.0, 0.0, 0.3], "superficial": true },
-                           "zhi": { "type": "outlet", "pressure": 0.0 } } },
-  "particles": {
-    "dt": 5e-5,
-    "materials": [ { "density": 2500.0, "young": 1e6, "poisson": 0.3 } ],
-    "sources": [ { "type": "layered", "lo": [0.0, 0.0, 0.0], "hi": [0.16, 0.04, 0.05],
-                   "count": 1500, "radius": 0.002 } ]
-  }
-})";
+const char* const kBed = test::kLayeredBedCase;
 
 const char* kPeriodic = R"({
   "domain": { "length": [0.16, 0.04, 0.12], "cells": [16, 4, 12], "periodic": { "x": true } },
