@@ -130,4 +130,31 @@ inline const char* const kLayeredBedCase = R"({
   }
 })";
 
+/// This rank alone, for the serial reference run beside a parallel one (freed at scope end:
+/// declare it before the simulations that use it).
+class SelfComm {
+ public:
+  SelfComm() { MPI_Comm_split(MPI_COMM_WORLD, Comm::world().rank(), 0, &raw_); }
+  ~SelfComm() { MPI_Comm_free(&raw_); }
+  SelfComm(const SelfComm&) = delete;
+  SelfComm& operator=(const SelfComm&) = delete;
+  Comm comm() const { return Comm(raw_); }
+
+ private:
+  MPI_Comm raw_ = MPI_COMM_NULL;
+};
+
+/// A cell field's owned values by global cell (x fastest), the same on every rank (collective).
+inline std::vector<double> globalCellValues(coupling::Simulation& sim, const Field3<double>& f) {
+  const auto& dec = sim.decomposition();
+  const auto g = dec.grid();
+  std::vector<double> out(static_cast<std::size_t>(g.cellCount()), 0.0);
+  forEach(f.interior(), [&](int i, int j, int k) {
+    const long long gi = dec.lo()[0] + i, gj = dec.lo()[1] + j, gk = dec.lo()[2] + k;
+    out[static_cast<std::size_t>(gi + g.cells[0] * (gj + g.cells[1] * gk))] = f(i, j, k);
+  });
+  dec.comm().sumInPlace(std::span<double>(out));
+  return out;
+}
+
 }  // namespace coloc::test

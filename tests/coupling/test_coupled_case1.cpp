@@ -13,25 +13,15 @@ using namespace coloc;
 namespace {
 
 std::vector<double> globalPressure(coupling::Simulation& sim) {
-  const auto& dec = sim.decomposition();
-  const auto g = dec.grid();
-  std::vector<double> out(static_cast<std::size_t>(g.cellCount()), 0.0);
-  const auto& p = sim.fluid()->fields().p;
-  forEach(p.interior(), [&](int i, int j, int k) {
-    const long long gi = dec.lo()[0] + i, gj = dec.lo()[1] + j, gk = dec.lo()[2] + k;
-    out[static_cast<std::size_t>(gi + g.cells[0] * (gj + g.cells[1] * gk))] = p(i, j, k);
-  });
-  dec.comm().sumInPlace(std::span<double>(out));
-  return out;
+  return test::globalCellValues(sim, sim.fluid()->fields().p);
 }
 
 }  // namespace
 
 TEST(Case1, ParallelRunMatchesSerialStepByStep) {
   const Comm world = Comm::world();
-  MPI_Comm selfRaw;
-  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
-  const Comm self(selfRaw);
+  const test::SelfComm selfComm;
+  const Comm self = selfComm.comm();
   // The pressure is solved to 1e-13 so that the fields of the two runs differ by round-off only.
   const std::vector<std::string> over = {"run.end_time=0.4", "run.progress_interval_s=0",
                                          "fluid.pressure.tol=1e-13"};
@@ -71,5 +61,4 @@ TEST(Case1, ParallelRunMatchesSerialStepByStep) {
     for (std::size_t c = 0; c < pp.size(); ++c) ASSERT_NEAR(pp[c], ps[c], 1e-10 * scale) << c;
     EXPECT_LE(par.momentumBalance(), 1e-12);
   }
-  MPI_Comm_free(&selfRaw);
 }

@@ -15,25 +15,15 @@ using namespace coloc;
 namespace {
 
 std::vector<double> globalPressure(coupling::Simulation& sim) {
-  const auto& dec = sim.decomposition();
-  const auto g = dec.grid();
-  std::vector<double> out(static_cast<std::size_t>(g.cellCount()), 0.0);
-  const auto& p = sim.fluid()->fields().p;
-  forEach(p.interior(), [&](int i, int j, int k) {
-    const long long gi = dec.lo()[0] + i, gj = dec.lo()[1] + j, gk = dec.lo()[2] + k;
-    out[static_cast<std::size_t>(gi + g.cells[0] * (gj + g.cells[1] * gk))] = p(i, j, k);
-  });
-  dec.comm().sumInPlace(std::span<double>(out));
-  return out;
+  return test::globalCellValues(sim, sim.fluid()->fields().p);
 }
 
 }  // namespace
 
 TEST(Case1Outflow, ParticleLeavesSameStepOnEveryRankCount) {
   const Comm world = Comm::world();
-  MPI_Comm selfRaw;
-  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
-  const Comm self(selfRaw);
+  const test::SelfComm selfComm;
+  const Comm self = selfComm.comm();
   // started at x = 0.65 m (a third of a metre from the outlet: it crosses the block faces at
   // 0.75 m on 4 ranks) so that the test stays short
   const std::vector<std::string> over = {
@@ -93,7 +83,6 @@ TEST(Case1Outflow, ParticleLeavesSameStepOnEveryRankCount) {
     for (std::size_t c = 0; c < pp.size(); ++c) ASSERT_NEAR(pp[c], ps[c], 1e-10 * scale) << c;
     EXPECT_LE(par.momentumBalance(), 1e-12);
   }
-  MPI_Comm_free(&selfRaw);
 }
 
 TEST(Case1Outflow, WallOutletKeepsTheParticle) {

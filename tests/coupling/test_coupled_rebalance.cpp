@@ -71,8 +71,7 @@ std::array<double, 4> fieldSums(coupling::Simulation& sim) {
 
 TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
   const Comm world = Comm::world();
-  MPI_Comm selfRaw;
-  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
+  const test::SelfComm selfComm;
   {
     const Config cfg = test::caseFromText(kCase);
     const Config serialCfg = test::caseFromText(kCase, {"partition.rebalance_interval=0"});
@@ -84,7 +83,7 @@ TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
     coupling::Layouts even{
         decompositionFromConfig(world, cfg), std::nullopt, "balanced", CostModel{}, 1.0, 1.0};
     auto sim = std::make_unique<coupling::Simulation>(cfg, std::move(even));
-    coupling::Simulation ser(Comm(selfRaw), serialCfg);
+    coupling::Simulation ser(selfComm.comm(), serialCfg);
     int moves = 0;
     while (!sim->finished()) {
       sim->step();
@@ -137,5 +136,4 @@ TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
     for (std::size_t k = 0; k < a.size(); ++k)
       ASSERT_NEAR(a[k], b[k], 1e-10 * (k % 6 < 3 ? 0.12 : vmax)) << "particle " << k / 6;
   }
-  MPI_Comm_free(&selfRaw);
 }

@@ -196,16 +196,14 @@ TEST(SelfVelocity, SettlingAtDOverH02) {
 TEST(SelfVelocity, SerialEqualsParallel) {
   const Comm world = Comm::world();
   if (world.size() == 1) GTEST_SKIP() << "needs 2 ranks";
-  MPI_Comm selfRaw;
-  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
+  const test::SelfComm selfComm;
   {
     const Sphere s = sphere(4e-5, 0.4, 0.08);
     const std::vector<double> at = {5};
     const auto par = settle(world, s, at, "stokeslet");
-    const auto ser = settle(Comm(selfRaw), s, at, "stokeslet");
+    const auto ser = settle(selfComm.comm(), s, at, "stokeslet");
     EXPECT_NEAR(par[0], ser[0], 1e-12);
   }
-  MPI_Comm_free(&selfRaw);
 }
 
 TEST(SelfVelocity, FrozenSphereFollowsTheTable) {

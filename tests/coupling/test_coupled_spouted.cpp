@@ -64,8 +64,7 @@ class Spouted : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Spouted, JetPatchSameAsSerial) {
   const Comm world = Comm::world();
-  MPI_Comm selfRaw;
-  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
+  const test::SelfComm selfComm;
   {
     std::vector<std::string> ov{"partition.strategy=" + GetParam()};
     if (GetParam() == "uniform" && world.size() == 2) ov.push_back("partition.dims=[2,1,1]");
@@ -73,7 +72,7 @@ TEST_P(Spouted, JetPatchSameAsSerial) {
     const Config cfg = test::caseFromText(kCase, ov);  // the simulations keep references
     const Config serialCfg = test::caseFromText(kCase);
     coupling::Simulation par(world, cfg);
-    coupling::Simulation ser(Comm(selfRaw), serialCfg);
+    coupling::Simulation ser(selfComm.comm(), serialCfg);
     double worstBalance = 0;
     while (!par.finished()) {
       par.step();
@@ -112,7 +111,6 @@ TEST_P(Spouted, JetPatchSameAsSerial) {
           GetParam().c_str(), world.size(), vzmax,
           r["particles"]["contacts_per_particle"].get<double>(), worstBalance);
   }
-  MPI_Comm_free(&selfRaw);
 }
 
 INSTANTIATE_TEST_SUITE_P(Strategies, Spouted,

@@ -55,13 +55,12 @@ class Strategy : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Strategy, SameTrajectoriesAsSerial) {
   const Comm world = Comm::world();
-  MPI_Comm selfRaw;
-  MPI_Comm_split(world.raw(), world.rank(), 0, &selfRaw);
+  const test::SelfComm selfComm;
   {
     const Config cfg = test::caseFromText(kCase, {"partition.strategy=" + GetParam()});
     const Config serialCfg = test::caseFromText(kCase);
     coupling::Simulation par(world, cfg);
-    coupling::Simulation ser(Comm(selfRaw), serialCfg);
+    coupling::Simulation ser(selfComm.comm(), serialCfg);
     while (!par.finished()) {
       par.step();
       ser.step();
@@ -88,7 +87,6 @@ TEST_P(Strategy, SameTrajectoriesAsSerial) {
       EXPECT_FALSE(par.independent());
     }
   }
-  MPI_Comm_free(&selfRaw);
 }
 
 INSTANTIATE_TEST_SUITE_P(Strategies, Strategy,
