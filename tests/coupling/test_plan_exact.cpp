@@ -35,18 +35,7 @@ const char* kChannel = R"({
 })";
 
 // Periodic along x, coupled: DEM ghosts cross the periodic face with a shift.
-const char* kPeriodic = R"({
-  "domain": { "length": [0.16, 0.04, 0.12], "cells": [16, 4, 12], "periodic": { "x": true } },
-  "gravity": [0.0, 0.0, -9.81],
-  "run": { "mode": "coupled", "steps": 1 },
-  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 5e-4, "initial_velocity": [0.02, 0.0, 0.0] },
-  "particles": {
-    "dt": 5e-5,
-    "materials": [ { "density": 2500.0, "young": 1e6, "poisson": 0.3 } ],
-    "sources": [ { "type": "random", "lo": [0.0, 0.0, 0.0], "hi": [0.16, 0.04, 0.12],
-                   "count": 900, "radius": 0.002, "velocity_spread": 0.0 } ]
-  }
-})";
+const char* const kPeriodic = test::kPeriodicSuspensionCase;
 
 struct Param {
   const char* name;
