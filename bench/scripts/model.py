@@ -249,7 +249,27 @@ def neighbours(dims, r):
     return sum((c[a] > 0) + (c[a] < dims[a] - 1) for a in range(3) if dims[a] > 1)
 
 
+def box_face_neighbours(boxes, r):
+    """Face neighbours of box r among general boxes [lo_x, lo_y, lo_z, hi_x, hi_y, hi_z] (the
+    tiled strategy): the boxes sharing a face of positive area with it (no periodic images, as
+    neighbours() for Cartesian blocks)."""
+    b = boxes[r]
+    n = 0
+    for q, o in enumerate(boxes):
+        if q == r:
+            continue
+        for a in range(3):
+            if b[3 + a] != o[a] and o[3 + a] != b[a]:
+                continue
+            if all(min(b[3 + e], o[3 + e]) > max(b[e], o[e]) for e in range(3) if e != a):
+                n += 1
+                break
+    return n
+
+
 def pfmg_levels(layout):
+    if "boxes" in layout:  # tiled: the global grid is the boxes' union
+        return grid_levels([max(b[3 + a] for b in layout["boxes"]) for a in range(3)])
     return grid_levels([cuts[-1] for cuts in layout["fluid_cuts"]])
 
 
@@ -274,7 +294,8 @@ def predict_layout(costs, layout, prof):
     o_su = ov.get("per_level_neighbour_setup_s", 0.0)
     levels = pfmg_levels(layout)
     logp = math.ceil(math.log2(P)) if P > 1 else 0
-    dims = layout["fluid_dims"]
+    dims = layout.get("fluid_dims")
+    boxes = layout.get("boxes")
 
     def net(kind, r):
         return ks[kind]["messages"][r] * lat + ks[kind]["bytes"][r] / bw
@@ -283,7 +304,7 @@ def predict_layout(costs, layout, prof):
     for r in range(P):
         cells, parts = pr["cells"][r], pr["particles"][r]
         coupled = pr["proxies"][r] if indep else parts
-        nb = neighbours(dims, r) if P > 1 else 0
+        nb = 0 if P == 1 else (box_face_neighbours(boxes, r) if boxes else neighbours(dims, r))
         fluid = cells * costs["fluid_per_cell_step"] * f["fluid"]
         psetup = setups * (cells * costs.get("pressure_setup_per_cell_step", 0.0) *
                            f["pressure_setup"] + levels * nb * o_su)

@@ -60,6 +60,13 @@ def main():
     check("neighbours 2x1x1 rank 0", model.neighbours([2, 1, 1], 0), 1)
     check("neighbours 3x3x3 centre", model.neighbours([3, 3, 3], 13), 6)
     check("neighbours 3x3x3 corner", model.neighbours([3, 3, 3], 0), 3)
+    # tiled boxes on 4x4x1 cells: a left half and two right quarters; an edge contact is no face
+    tiled = [[0, 0, 0, 2, 4, 1], [2, 0, 0, 4, 2, 1], [2, 2, 0, 4, 4, 1]]
+    check("box neighbours left half", model.box_face_neighbours(tiled, 0), 2)
+    check("box neighbours quarter", model.box_face_neighbours(tiled, 1), 2)
+    diag = [[0, 0, 0, 2, 2, 1], [2, 2, 0, 4, 4, 1], [2, 0, 0, 4, 2, 1], [0, 2, 0, 2, 4, 1]]
+    check("box neighbours: corner contact is none", model.box_face_neighbours(diag, 0), 2)
+    check("PFMG levels of boxes", model.pfmg_levels({"boxes": tiled}), 1 + 2 + 2)
     check("PFMG levels 10^3", model.pfmg_levels(layout(2)), 1 + 3 * 4)
 
     # --- calibration: 10 steps, 1000 cells; fluid 0.010 s, set-up 0.004 s, solve 0.002 s
