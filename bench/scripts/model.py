@@ -13,8 +13,8 @@ Unit costs (seconds from a 1-rank run of the same physics; wall, or thread-CPU w
                  coefficients change, hypre's PCG+PFMG set-up; report.pressure.setups counts them);
   pressure solve per cell and PCG iteration, x the iterations per step of the 1-rank run;
   hypre's overhead per PFMG level and face neighbour (per iteration, per set-up) that 1 rank
-                 cannot show: bench_fv BM_PressureSolveBox on the case's grid (else
-                 BM_PressureSolve on cubes) at 1 and 2 ranks (--pfmg1, --pfmg2);
+                 cannot show: bench_fv BM_PressureSolve on cubes (--overhead-grid own: on the
+                 case's grid, BM_PressureSolveBox) at 1 and 2 ranks (--pfmg1, --pfmg2);
   DEM            per particle and sub-step (contacts folded in);
   coupling       per particle-step on the rank's coupled particles (own, or proxies).
 Memory term (bench_stream, --stream): B(k) = the triad bandwidth ONE rank gets while k ranks of a
@@ -108,7 +108,8 @@ def stream_memory(stream):
 
 def bench_points(bench, busy):
     """BM_PressureSolve/n/0 and BM_PressureSolveBox/nx/ny/nz/0 (bench_fv,
-    --benchmark_format=json): {(nx, ny, nz): (seconds per PCG iteration, set-up seconds, ranks)};
+    --benchmark_format=json): {("cube" | "box", nx, ny, nz): (seconds per PCG iteration, set-up
+    seconds, ranks)};
     thread-CPU times with busy; the fastest of --benchmark_repetitions."""
     pts = {}
     for b in bench.get("benchmarks", []):
@@ -116,9 +117,9 @@ def bench_points(bench, busy):
         if b.get("run_type") == "aggregate":
             continue
         if parts[0] == "BM_PressureSolve" and parts[2] == "0":
-            n = (int(parts[1]),) * 3
+            n = ("cube",) + (int(parts[1]),) * 3
         elif parts[0] == "BM_PressureSolveBox" and parts[4] == "0":
-            n = tuple(int(x) for x in parts[1:4])
+            n = ("box",) + tuple(int(x) for x in parts[1:4])
         else:
             continue
         unit = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[b.get("time_unit", "ns")]
@@ -138,43 +139,45 @@ def grid_levels(dims):
     return 1 + sum(math.ceil(math.log2(n)) for n in dims if n > 1)
 
 
-def solver_overhead(costs, one, two, busy, latency, grid=None):
+def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False):
     """hypre's cost per PFMG level and face neighbour that a 1-rank run cannot show (comm
     packages, packing, the coarse levels' halos), per PCG iteration and per set-up: from
     bench_fv's pressure solve at 1 and 2 ranks (2 x 1 x 1: one neighbour),
     o = (t(2 ranks) - f t(1 rank) / 2) / levels, f the memory contention of the phase at 2 ranks,
-    less the message latencies the network model adds itself. With a point on the case's own
-    grid (BM_PressureSolveBox), that point alone (hypre's overhead depends on the block's shape:
-    the coarse levels of a thin block are few cells); otherwise the mean over the cubes."""
+    less the message latencies the network model adds itself; the mean over the cubes
+    (BM_PressureSolve/n). grid="own" takes the point on the case's own grid instead
+    (BM_PressureSolveBox): hypre alone on that grid at 2 ranks, which has measured far less
+    overhead than the same solve shows inside a coupled step (docs/plan.md), so the cubes stay
+    the default."""
     p1, p2 = bench_points(one, busy), bench_points(two, busy)
     c2 = costs.get("memory_calibration", {}).get("contention_2", 1.0)
     ms = costs["memory_share"]
     f_it = 1 + ms["pressure_solve"] * (c2 - 1)
     f_su = 1 + ms["pressure_setup"] * (c2 - 1)
     both = [n for n in sorted(set(p1) & set(p2)) if p1[n][2] == 1 and p2[n][2] == 2]
-    own = tuple(grid) if grid is not None else None
+    own = ("box",) + tuple(grid) if grid is not None and use_own else None
     if own in both:
         both = [own]
     else:
-        both = [n for n in both if n[0] == n[1] == n[2]]
+        both = [n for n in both if n[0] == "cube"]
     o_it, o_su, used = [], [], []
     for n in both:
-        levels = grid_levels(n)
+        levels = grid_levels(n[1:])
         o_it.append(max(0.0, p2[n][0] - f_it * p1[n][0] / 2) / levels
                     - (EXCH_PER_LEVEL + 1) * latency - ALLREDUCES_PER_ITER * latency / levels)
         o_su.append(max(0.0, p2[n][1] - f_su * p1[n][1] / 2) / levels
                     - EXCH_PER_SETUP_LEVEL * latency)
-        used.append([list(n), p1[n][0], p2[n][0], p1[n][1], p2[n][1]])
+        used.append([list(n[1:]), p1[n][0], p2[n][0], p1[n][1], p2[n][1]])
     if not used:
         return None
     return {"per_level_neighbour_iteration_s": max(0.0, sum(o_it) / len(o_it)),
             "per_level_neighbour_setup_s": max(0.0, sum(o_su) / len(o_su)),
-            "from": "the case's own grid" if own is not None and [list(own)] == [u[0] for u in used]
-            else "cubes",
+            "from": "the case's own grid" if own in both else "cubes",
             "points_grid_iter1_iter2_setup1_setup2": used}
 
 
-def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None, latency=0.0):
+def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None, latency=0.0,
+              overhead_grid="cubes"):
     steps = report["run"]["steps"] - report["run"].get("first_step", 0)
     sub = report["run"]["dem_substeps"]
     cells = 1
@@ -217,7 +220,7 @@ def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None
                                        "stream_loadavg": stream.get("loadavg", "")}
     if pfmg1 is not None and pfmg2 is not None:
         o = solver_overhead(costs, pfmg1, pfmg2, key != "avg", latency,
-                            report["config"]["domain"]["cells"])
+                            report["config"]["domain"]["cells"], overhead_grid == "own")
         if o:
             costs["pressure_overhead"] = o
     return costs
@@ -350,6 +353,8 @@ def main():
                    "on 1 rank")
     c.add_argument("--pfmg2", help="the same on 2 ranks (hypre's per-level, per-neighbour cost)")
     c.add_argument("--pingpong", help="latency the network model adds (taken off the overhead)")
+    c.add_argument("--overhead-grid", choices=["cubes", "own"], default="cubes",
+                   help="hypre's overhead from the cubes (default) or the case's own grid")
     p = sp.add_parser("predict")
     p.add_argument("--costs", required=True)
     p.add_argument("--plan", required=True)
@@ -368,7 +373,7 @@ def main():
         pp = load(a.pingpong)
         costs = calibrate(load(a.report), "busy_avg" if a.busy else "avg", load(a.corun),
                           load(a.stream), load(a.pfmg1), load(a.pfmg2),
-                          pp["latency_s"] if pp else 0.0)
+                          pp["latency_s"] if pp else 0.0, a.overhead_grid)
         json.dump(costs, sys.stdout, indent=1)
         print()
         return

@@ -112,11 +112,17 @@ def main():
     cb = model.calibrate(report(10, alone), "busy_avg", report(10, co), stream,
                          both(1, 1e-3, 10e-3, 1e-3, 10e-3),
                          both(2, 1e-3 + 13 * o_it, 5e-3 + 13 * o_su, 1e-3 + 13 * (o_it + 3e-6),
-                              5e-3 + 13 * o_su), 1e-6)
+                              5e-3 + 13 * o_su), 1e-6, "own")
     ob = cb["pressure_overhead"]
     check("own-grid overhead per iteration", ob["per_level_neighbour_iteration_s"],
           o_it + 3e-6 - 8e-6 - 3e-6 / 13)
     check("own-grid point named", ob["from"] == "the case's own grid", True)
+    cc = model.calibrate(report(10, alone), "busy_avg", report(10, co), stream,
+                         both(1, 1e-3, 10e-3, 1e-3, 10e-3),
+                         both(2, 1e-3 + 13 * o_it, 5e-3 + 13 * o_su, 1e-3 + 13 * (o_it + 3e-6),
+                              5e-3 + 13 * o_su), 1e-6)
+    check("default: the cubes", cc["pressure_overhead"]["per_level_neighbour_iteration_s"],
+          o_it - 8e-6 - 3e-6 / 13)
 
     # --- prediction at 1 rank reproduces the calibration; at 2 ranks, by hand
     prof = {"latency_s": 1e-6, "bandwidth_Bps": 1e9, "ranks_per_node": 1, "memory_Bps": 1e9,
