@@ -180,7 +180,7 @@ def validate_case(a, runs, case, out_dir):
     p2 = os.path.join(runs, "pfmg-np2.json")
     have_fv = os.path.exists(p1) and os.path.exists(p2)
     costs = model.calibrate(np1, key, corun, stream, load(p1) if have_fv else None,
-                            load(p2) if have_fv else None, pp["latency_s"])
+                            load(p2) if have_fv else None, pp["latency_s"], a.overhead_grid)
     src = costs["source"]
     if os.path.isabs(src) and "/bench/cases/" in src:  # reports of runs made from a checkout
         costs["source"] = "bench/cases/" + src.split("/bench/cases/")[-1]
@@ -258,6 +258,8 @@ def main():
     ap.add_argument("--steps", type=int, default=0, help="override run.steps (0: the case's)")
     ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
     ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
+    ap.add_argument("--overhead-grid", choices=["cubes", "own"], default="cubes",
+                    help="hypre's per-level overhead from the cubes or the case's own grid")
     ap.add_argument("--pick", choices=["min", "median"], default="min",
                     help="the fastest run of each set (least disturbed) or the median")
     ap.add_argument("--runs", default="/tmp/coloc-validate")
