@@ -142,6 +142,13 @@ void DemSolver::Impl::forces(bool update) {
         const double r2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
         const double rs = ri + R[u];
         touch = !(r2 >= rs * rs);
+        // the partner's rows that passes 2 and 3 read and write, fetched a chunk ahead
+        for (int c = 0; c < 3; ++c) {
+          __builtin_prefetch(in.v[c] + u);
+          __builtin_prefetch(in.w[c] + u);
+          __builtin_prefetch(FX[c] + u, 1);
+          __builtin_prefetch(TX[c] + u, 1);
+        }
         ch.u[k] = j;
         ch.coef[k] = coefRow + mat[u];
         ch.wall[k] = -1;
@@ -169,6 +176,7 @@ void DemSolver::Impl::forces(bool update) {
       }
       ch.i[k] = static_cast<int>(i);
       ch.slot[k] = sl[e];
+      __builtin_prefetch(in.hS + 3 * std::max(sl[e], 0), 1);  // the history, read and written
       ch.m = k + (touch ? 1 : 0);
       if (ch.m == kChunk) flush();
     }
