@@ -11,7 +11,7 @@
 //   3. scatter (scalar): in the chunk's order, which is the list's order, the results are added
 //      to both particles, the shear written back, walls computed: every particle receives the
 //      same terms in the same order as the one-pass loop, at any rank count.
-// forces.cpp is compiled with -ffp-contract=off, so a pair's bits do not depend on the lane, the
+// The DEM is compiled with -ffp-contract=off, so a pair's bits do not depend on the lane, the
 // vector width or a scalar remainder (add, mul, div and sqrt are exactly rounded everywhere), and
 // a portable build (COLOC_DEM_NATIVE=OFF) gives the same bits as a native one.
 #pragma once
