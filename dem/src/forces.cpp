@@ -68,7 +68,10 @@ void DemSolver::Impl::forces(bool update) {
   std::int64_t worstId = -1, worstPartner = 0;
   // passes 2 and 3 over the chunk gathered so far
   const auto flush = [&] {
-    pairChunk<M, Rolling>(in, update, ch);
+    if (nMat == 1)
+      pairChunk<M, Rolling, true>(in, update, ch);
+    else
+      pairChunk<M, Rolling, false>(in, update, ch);
     const double* W[3] = {in.w[0], in.w[1], in.w[2]};
     for (int k = 0; k < ch.m; ++k) {
       const auto i = static_cast<std::size_t>(ch.i[k]);

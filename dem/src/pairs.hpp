@@ -45,8 +45,9 @@ struct PairInputs {
 };
 
 /// Pass 2 over entries [0, ch.m) of the chunk. Wall entries are computed too, on harmless
-/// stand-in values (partner = holder, dx = (1, 0, 0)), and ignored by pass 3.
-template <Model M, bool Rolling>
+/// stand-in values (partner = holder, dx = (1, 0, 0)), and ignored by pass 3. Single: one
+/// material (every coef is 0), the coefficients are broadcast instead of gathered.
+template <Model M, bool Rolling, bool Single>
 inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
   const int m = ch.m;
   // the columns as locals (loads of the pointers inside the loop would block the vectoriser)
@@ -78,8 +79,8 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
     const auto h = static_cast<std::size_t>(3 * ch.slot[k]);
     double sh[3] = {hS[h], hS[h + 1], hS[h + 2]};
     double Fp[3], c[3], rl[3];
-    pairForce<M, Rolling>(coeff[ch.coef[k]], dt, update, nrm, delta, Reff, meff, vr, ws, wr, sh, Fp,
-                          c, rl);
+    pairForce<M, Rolling>(coeff[Single ? 0 : ch.coef[k]], dt, update, nrm, delta, Reff, meff, vr,
+                          ws, wr, sh, Fp, c, rl);
     for (int d = 0; d < 3; ++d) {
       ch.fp[d][k] = Fp[d];
       ch.nxft[d][k] = c[d];
