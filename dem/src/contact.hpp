@@ -85,6 +85,9 @@ inline void cross3(const double* a, const double* b, double* c) {
 /// canonical order:  force on i: +Fp, on j: -Fp;  torque on i: -r_i nxft - roll, on j: -r_j nxft +
 /// roll (nxft = n x F_t, roll = the rolling-resistance torque on i, zero when mu_r = 0). Returns
 /// |F_n|.
+/// Branch-free (both sides of the Coulomb cap and of the rolling test are computed and one is
+/// selected; the unselected one may be inf/NaN and is never used), so that the pair loop of
+/// pairs.hpp vectorises across pairs; each selected value is the one the branchy form computes.
 template <Model M, bool Rolling = true>
 inline double pairForce(const PairCoeff& c, double dt, bool update, const double* n, double delta,
                         double Reff, double meff, const double* vr, const double* wsum,
@@ -109,31 +112,34 @@ inline double pairForce(const PairCoeff& c, double dt, bool update, const double
   cross3(wsum, n, wxn);
   const double vt[3] = {vr[0] - vn * n[0] - wxn[0], vr[1] - vn * n[1] - wxn[1],
                         vr[2] - vn * n[2] - wxn[2]};
-  if (update) {
-    const double sn = dot3(shear, n);
-    for (int k = 0; k < 3; ++k) shear[k] += vt[k] * dt - sn * n[k];
+  double s[3] = {shear[0], shear[1], shear[2]};
+  const double sn = dot3(s, n);
+  for (int k = 0; k < 3; ++k) {
+    const double moved = s[k] + (vt[k] * dt - sn * n[k]);
+    s[k] = update ? moved : s[k];
   }
-  double Ft[3] = {-kt * shear[0], -kt * shear[1], -kt * shear[2]};
+  double Ft[3] = {-kt * s[0], -kt * s[1], -kt * s[2]};
   const double ftMax = c.mu * std::fabs(Fn);
   const double ft2 = dot3(Ft, Ft);
-  if (ft2 > ftMax * ftMax) {
-    const double ratio = ftMax / std::sqrt(ft2);
-    for (int k = 0; k < 3; ++k) Ft[k] *= ratio;
-    if (update && kt > 0)
-      for (int k = 0; k < 3; ++k) shear[k] = -Ft[k] / kt;
-  } else {
-    for (int k = 0; k < 3; ++k) Ft[k] -= gt * vt[k];
+  const bool slip = ft2 > ftMax * ftMax;
+  const double ratio = ftMax / std::sqrt(ft2);  // used only when slipping (ft2 > 0 then)
+  const bool reset = slip & update & (kt > 0);  // & not &&: no branch
+  for (int k = 0; k < 3; ++k) {
+    const double capped = Ft[k] * ratio;
+    const double damped = Ft[k] - gt * vt[k];
+    const double back = -capped / kt;
+    Ft[k] = slip ? capped : damped;
+    shear[k] = reset ? back : s[k];
   }
   for (int k = 0; k < 3; ++k) Fp[k] = Fn * n[k] + Ft[k];
   cross3(n, Ft, nxft);
   if constexpr (!Rolling) return std::fabs(Fn);
-  roll[0] = roll[1] = roll[2] = 0;
-  if (c.muR > 0) {
-    const double w = std::sqrt(dot3(wrel, wrel));
-    if (w > 0) {
-      const double s = c.muR * Reff * std::fabs(Fn) / w;
-      for (int k = 0; k < 3; ++k) roll[k] = s * wrel[k];
-    }
+  const double w = std::sqrt(dot3(wrel, wrel));
+  const double rs = c.muR * Reff * std::fabs(Fn) / w;
+  const bool rolls = (c.muR > 0) & (w > 0);
+  for (int k = 0; k < 3; ++k) {
+    const double t = rs * wrel[k];
+    roll[k] = rolls ? t : 0.0;
   }
   return std::fabs(Fn);
 }

@@ -89,6 +89,7 @@ void DemSolver::Impl::initialIntegrate() {
     double* v = p.v[d].data();
     const double* f = p.f[d].data();
     const double* m = p.mass.data();
+#pragma omp simd
     for (std::size_t i = 0; i < n; ++i) {
       v[i] += h * f[i] / m[i];
       x[i] += dt * v[i];
@@ -96,6 +97,7 @@ void DemSolver::Impl::initialIntegrate() {
     double* w = p.omega[d].data();
     const double* t = p.torque[d].data();
     const double* r = p.radius.data();
+#pragma omp simd
     for (std::size_t i = 0; i < n; ++i) w[i] += h * t[i] / (0.4 * m[i] * r[i] * r[i]);
   }
 }
@@ -107,10 +109,12 @@ void DemSolver::Impl::finalIntegrate() {
     double* v = p.v[d].data();
     const double* f = p.f[d].data();
     const double* m = p.mass.data();
+#pragma omp simd
     for (std::size_t i = 0; i < n; ++i) v[i] += h * f[i] / m[i];
     double* w = p.omega[d].data();
     const double* t = p.torque[d].data();
     const double* r = p.radius.data();
+#pragma omp simd
     for (std::size_t i = 0; i < n; ++i) w[i] += h * t[i] / (0.4 * m[i] * r[i] * r[i]);
   }
 }
@@ -137,12 +141,17 @@ void DemSolver::Impl::checkOverlap(double globalMax) {
 bool DemSolver::Impl::decideRebuild() {
   double m2 = 0;
   const std::size_t n = p.nOwned;
+  // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
+  // double first, so a lost particle forces the rebuild)
+  const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
+  const double *X0 = list.x0[0].data(), *Y0 = list.x0[1].data(), *Z0 = list.x0[2].data();
+  constexpr double kBig = std::numeric_limits<double>::max();
+#pragma omp simd reduction(max : m2)
   for (std::size_t i = 0; i < n; ++i) {
-    const double dx = p.x[0][i] - list.x0[0][i], dy = p.x[1][i] - list.x0[1][i],
-                 dz = p.x[2][i] - list.x0[2][i];
-    double d2 = dx * dx + dy * dy + dz * dz;
-    if (!(d2 <= std::numeric_limits<double>::max())) d2 = std::numeric_limits<double>::max();
-    m2 = std::max(m2, d2);
+    const double dx = X[i] - X0[i], dy = Y[i] - Y0[i], dz = Z[i] - Z0[i];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    const double c = d2 <= kBig ? d2 : kBig;
+    m2 = m2 > c ? m2 : c;
   }
   // a centre beyond an outflow face, or particles entering, rebuild now (removal, insertion)
   if (forceRebuild) m2 = std::numeric_limits<double>::max();

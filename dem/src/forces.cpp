@@ -8,6 +8,7 @@
 #include <string>
 
 #include "impl.hpp"
+#include "pairs.hpp"
 
 namespace coloc::dem {
 
@@ -29,7 +30,9 @@ void DemSolver::Impl::computeForces(bool update) {
 // a ghost's owner). Holders are visited in K order (see buildLists), so a particle receives the
 // terms of its lower-K partners (pushed by their rows, in increasing K), then those of its own
 // row (increasing K), then its walls: the same sum in the same order at any rank count, and the
-// pair term itself is computed from the same operands (lower K first) everywhere.
+// pair term itself is computed from the same operands (lower K first) everywhere. The touching
+// entries go through a PairChunk (pairs.hpp): gathered in list order, their contact law computed
+// on the vector units, the results added in list order (the order above).
 template <Model M, bool Rolling>
 void DemSolver::Impl::forces(bool update) {
   const std::size_t n = p.nOwned, nAll = p.size();
@@ -38,116 +41,150 @@ void DemSolver::Impl::forces(bool update) {
   for (int k = 0; k < 3; ++k) {
     const double* fe = p.fExt[k].data();
     const double* ms = p.mass.data();
+    double* fk = FX[k];
+    double* tk = TX[k];
+    const double gk = g[k];
+#pragma omp simd
     for (std::size_t i = 0; i < n; ++i) {
-      FX[k][i] = ms[i] * g[k] + fe[i];
-      TX[k][i] = 0;
+      fk[i] = ms[i] * gk + fe[i];
+      tk[i] = 0;
     }
   }
   const double* X[3] = {p.x[0].data(), p.x[1].data(), p.x[2].data()};
-  const double* V[3] = {p.v[0].data(), p.v[1].data(), p.v[2].data()};
-  const double* W[3] = {p.omega[0].data(), p.omega[1].data(), p.omega[2].data()};
   const double* R = p.radius.data();
-  const double* Ms = p.mass.data();
   const int* mat = p.material.data();
   const int* nbrs = list.nbr.data();
   int* sl = list.slot.data();
+  PairInputs in{{p.v[0].data(), p.v[1].data(), p.v[2].data()},
+                {p.omega[0].data(), p.omega[1].data(), p.omega[2].data()},
+                R,
+                p.mass.data(),
+                hist.hS.data(),
+                pairC.data(),
+                dt};
+  PairChunk& ch = chunk;
   long long nc = 0, nw = 0;
   double worst = 0;
   std::int64_t worstId = -1, worstPartner = 0;
+  // passes 2 and 3 over the chunk gathered so far
+  const auto flush = [&] {
+    if (nMat == 1)
+      pairChunk<M, Rolling, true>(in, update, ch);
+    else
+      pairChunk<M, Rolling, false>(in, update, ch);
+    const double* W[3] = {in.w[0], in.w[1], in.w[2]};
+    for (int k = 0; k < ch.m; ++k) {
+      const auto i = static_cast<std::size_t>(ch.i[k]);
+      const double ri = R[i];
+      double* sh = &hist.hS[3 * static_cast<std::size_t>(ch.slot[k])];
+      if (ch.wall[k] >= 0) {
+        const int w = ch.wall[k], d = w / 2, s = w % 2;
+        const double xi = X[d][i];
+        const double dist = s == 0 ? xi - bins.origin[d] : bins.origin[d] + bins.L[d] - xi;
+        const double delta = ri - dist;
+        double nrm[3] = {0, 0, 0};
+        nrm[d] = s == 0 ? 1.0 : -1.0;
+        const double vi[3] = {in.v[0][i], in.v[1][i], in.v[2][i]};
+        const double wi[3] = {W[0][i], W[1][i], W[2][i]};
+        const double ws[3] = {ri * wi[0], ri * wi[1], ri * wi[2]};
+        double F[3] = {FX[0][i], FX[1][i], FX[2][i]}, T[3] = {TX[0][i], TX[1][i], TX[2][i]};
+        detail::contactForce<M>(wallC[static_cast<std::size_t>(mat[i])], dt, update, nrm, delta, ri,
+                                in.mass[i], ri, vi, ws, wi, sh, F, T);
+        for (int c = 0; c < 3; ++c) FX[c][i] = F[c], TX[c][i] = T[c];
+        ++nw;
+        const double ov = delta / ri;
+        if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = -1;
+        continue;
+      }
+      const auto u = static_cast<std::size_t>(ch.u[k]);
+      const double rj = R[u];
+      for (int c = 0; c < 3; ++c) sh[c] = ch.shear[c][k];
+      if (i < n) {
+        for (int c = 0; c < 3; ++c) {
+          FX[c][i] += ch.fp[c][k];
+          TX[c][i] -= ri * ch.nxft[c][k];
+          if constexpr (Rolling) TX[c][i] -= ch.roll[c][k];
+        }
+        ++nc;
+      }
+      if (u < n) {
+        for (int c = 0; c < 3; ++c) {
+          FX[c][u] -= ch.fp[c][k];
+          TX[c][u] -= rj * ch.nxft[c][k];
+          if constexpr (Rolling) TX[c][u] += ch.roll[c][k];
+        }
+        ++nc;
+      }
+      const double delta = ch.delta[k], rmin = std::min(ri, rj);
+      if (delta > worst * rmin) {  // largest overlap / smaller radius, divided only when larger
+        worst = delta / rmin;
+        const bool ownI = i < n;
+        worstId = p.id[ownI ? i : u];
+        worstPartner = p.id[ownI ? u : i];
+      }
+    }
+    ch.m = 0;
+  };
+  // pass 1: every entry in list order; a touching one is appended (the store is unconditional,
+  // the count advances by the test), a contact that starts or ends takes or frees its slot
+  ch.m = 0;
   for (std::size_t q = 0; q < nAll; ++q) {
     const int e0 = list.rowStart[q], e1 = list.rowStart[q + 1];
     if (e0 == e1) continue;
     const auto i = static_cast<std::size_t>(bins.binItems[q]);
-    const bool ownI = i < n;
-    const double ri = R[i], mi = Ms[i];
-    double F[3] = {0, 0, 0}, T[3] = {0, 0, 0};
-    if (ownI)
-      for (int k = 0; k < 3; ++k) {
-        F[k] = FX[k][i];
-        T[k] = TX[k][i];
-      }
+    const double ri = R[i];
     const double xi[3] = {X[0][i], X[1][i], X[2][i]};
-    const double vi[3] = {V[0][i], V[1][i], V[2][i]};
-    const double wi[3] = {W[0][i], W[1][i], W[2][i]};
-    const PairCoeff* rowC = &pairC[static_cast<std::size_t>(mat[i] * nMat)];
+    const int coefRow = mat[i] * nMat;
     for (int e = e0; e < e1; ++e) {
       const int j = nbrs[e];
+      const int k = ch.m;
+      bool touch;
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
         const double dx[3] = {xi[0] - X[0][u], xi[1] - X[1][u], xi[2] - X[2][u]};
         const double r2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
-        const double rj = R[u], rs = ri + rj;
-        if (r2 >= rs * rs) {
-          if (sl[e] >= 0) hist.freeSlot(sl[e]), sl[e] = -1;
-          continue;
+        const double rs = ri + R[u];
+        touch = !(r2 >= rs * rs);
+        // the partner's rows that passes 2 and 3 read and write, fetched a chunk ahead
+        for (int c = 0; c < 3; ++c) {
+          __builtin_prefetch(in.v[c] + u);
+          __builtin_prefetch(in.w[c] + u);
+          __builtin_prefetch(FX[c] + u, 1);
+          __builtin_prefetch(TX[c] + u, 1);
         }
-        if (sl[e] < 0) sl[e] = hist.newSlot();
-        double* sh = &hist.hS[3 * static_cast<std::size_t>(sl[e])];
-        // R* and m* with one division, independent of the distance (in parallel with the
-        // square root and 1/r on the critical path)
-        const double mj = Ms[u], msum = mi + mj;
-        const double q0 = 1.0 / (rs * msum);
-        const double Reff = ri * rj * (msum * q0);
-        const double meff = mi * mj * (rs * q0);
-        const double r = std::sqrt(r2);
-        const double inv = 1.0 / r;
-        const double nrm[3] = {dx[0] * inv, dx[1] * inv, dx[2] * inv};
-        const double delta = rs - r;
-        const double vr[3] = {vi[0] - V[0][u], vi[1] - V[1][u], vi[2] - V[2][u]};
-        const double ws[3] = {ri * wi[0] + rj * W[0][u], ri * wi[1] + rj * W[1][u],
-                              ri * wi[2] + rj * W[2][u]};
-        const double wr[3] = {wi[0] - W[0][u], wi[1] - W[1][u], wi[2] - W[2][u]};
-        double Fp[3], c[3], rl[3];
-        detail::pairForce<M, Rolling>(rowC[mat[u]], dt, update, nrm, delta, Reff, meff, vr, ws, wr,
-                                      sh, Fp, c, rl);
-        if (ownI) {
-          for (int k = 0; k < 3; ++k) {
-            F[k] += Fp[k];
-            T[k] -= ri * c[k];
-            if constexpr (Rolling) T[k] -= rl[k];
-          }
-          ++nc;
-        }
-        if (u < n) {
-          for (int k = 0; k < 3; ++k) {
-            FX[k][u] -= Fp[k];
-            TX[k][u] -= rj * c[k];
-            if constexpr (Rolling) TX[k][u] += rl[k];
-          }
-          ++nc;
-        }
-        const double rmin = std::min(ri, rj);
-        if (delta > worst * rmin) {  // largest overlap / smaller radius, divided only when larger
-          worst = delta / rmin;
-          worstId = p.id[ownI ? i : u];
-          worstPartner = p.id[ownI ? u : i];
-        }
+        ch.u[k] = j;
+        ch.coef[k] = coefRow + mat[u];
+        ch.wall[k] = -1;
+        for (int c = 0; c < 3; ++c) ch.dx[c][k] = dx[c];
+        ch.r2[k] = r2;
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
         const double dist = s == 0 ? xi[d] - bins.origin[d] : bins.origin[d] + bins.L[d] - xi[d];
-        const double delta = ri - dist;
-        if (delta <= 0) {
-          if (sl[e] >= 0) hist.freeSlot(sl[e]), sl[e] = -1;
-          continue;
+        touch = !(ri - dist <= 0);
+        ch.u[k] = static_cast<int>(i);  // stand-in values for pass 2 (see pairChunk)
+        ch.coef[k] = 0;
+        ch.wall[k] = w;
+        ch.dx[0][k] = 1;
+        ch.dx[1][k] = ch.dx[2][k] = 0;
+        ch.r2[k] = 1;
+      }
+      if (touch != (sl[e] >= 0)) {  // a contact starts or ends (rare)
+        if (touch) {
+          sl[e] = hist.newSlot();
+          in.hS = hist.hS.data();  // the pool may have grown
+        } else {
+          hist.freeSlot(sl[e]);
+          sl[e] = -1;
         }
-        if (sl[e] < 0) sl[e] = hist.newSlot();
-        double* sh = &hist.hS[3 * static_cast<std::size_t>(sl[e])];
-        double nrm[3] = {0, 0, 0};
-        nrm[d] = s == 0 ? 1.0 : -1.0;
-        const double ws[3] = {ri * wi[0], ri * wi[1], ri * wi[2]};
-        detail::contactForce<M>(wallC[static_cast<std::size_t>(mat[i])], dt, update, nrm, delta, ri,
-                                mi, ri, vi, ws, wi, sh, F, T);
-        ++nw;
-        const double ov = delta / ri;
-        if (ov > worst) worst = ov, worstId = p.id[i], worstPartner = -1;
       }
+      ch.i[k] = static_cast<int>(i);
+      ch.slot[k] = sl[e];
+      __builtin_prefetch(in.hS + 3 * std::max(sl[e], 0), 1);  // the history, read and written
+      ch.m = k + (touch ? 1 : 0);
+      if (ch.m == kChunk) flush();
     }
-    if (ownI)
-      for (int k = 0; k < 3; ++k) {
-        FX[k][i] = F[k];
-        TX[k][i] = T[k];
-      }
   }
+  flush();
   tally = {nc, nw, worst, worstId, worstPartner};
 }
 

@@ -9,7 +9,7 @@
 //   ghosts.cpp     face exchanges: migration, ghost build and update (rows of the field table)
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
 //   neighbors.cpp  the half Verlet list build (and the history lookup of its entries)
-//   forces.cpp     contact and wall forces, contact energy
+//   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
 //   state.cpp      save/restore (checkpoints, re-balancing)
 #pragma once
 
@@ -27,6 +27,7 @@
 #include "ghosts.hpp"
 #include "history.hpp"
 #include "neighbors.hpp"
+#include "pairs.hpp"
 
 namespace coloc::dem {
 
@@ -99,6 +100,7 @@ struct DemSolver::Impl {
   detail::HistoryPool hist;
   detail::GhostPlan ghosts;
   std::vector<int> perm, iscr, inScr;  // scratch (grow-only)
+  detail::PairChunk chunk;             // the force loop's touching pairs (pairs.hpp)
 
   long long rebuilds = 0, steps = 0;
   // what the last force computation saw (forces.cpp): contacts of owned particles, wall
