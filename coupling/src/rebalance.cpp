@@ -38,6 +38,10 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
   const double n = dem ? static_cast<double>(dem->globalCount()) : 0.0;
   plan.model.perCell = std::max(busy[0] / static_cast<double>(g.cellCount()), 1e-15);
   plan.model.perParticle = n > 0 ? busy[1] / n : 0.0;
+  if (cfg.string("partition.rebalance_weights") == "case") {  // reproducible cuts
+    plan.model.perCell = std::max(cfg.number("partition.cost.cell"), 1e-15);
+    plan.model.perParticle = cfg.number("partition.cost.particle");
+  }
   if (!dem || sim.independent()) return plan;
 
   const auto& p = dem->particles();

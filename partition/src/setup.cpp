@@ -36,6 +36,11 @@ void declareDomainConfig(Schema& s) {
   s.number("partition.rebalance_threshold", 1.05,
            "balanced: re-balance only when the modelled largest block cost drops by this factor",
            Range::atLeast(1.0));
+  s.string("partition.rebalance_weights", "measured",
+           "the weights a re-balance places the cuts with: measured (seconds per cell and per "
+           "particle from the run's own phase timers) or case (partition.cost.cell and "
+           "partition.cost.particle: the same cuts on every run, for reproducible runs)",
+           {"measured", "case"});
   s.string("partition.rebalance_move", "memory",
            "how a re-balance moves the run: memory (fields remapped and particles sent to their "
            "new owners) or file (the former path through a scratch restart checkpoint "
