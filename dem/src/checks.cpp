@@ -219,12 +219,9 @@ void checkCase(const Config& cfg, const GlobalGrid& grid, const CaseParticles& p
   const int nMat = static_cast<int>(mats.size());
   const auto info = detail::inspectSources(cfg, grid, nMat);
   const auto inflow = detail::inspectInflow(cfg, grid, nMat);
-  double rmax = 0;
-  long long total = 0;
-  for (const auto& s : info) {
-    if (s.count > 0) rmax = std::max(rmax, s.rmax);
-    total += s.count;
-  }
+  const detail::SourceTotals totals = detail::sourceTotals(info);
+  double rmax = totals.rmax;
+  long long total = totals.count;
   for (const auto& f : inflow) rmax = std::max(rmax, f.size.rmax());
   const long long binTotal = total + (inflow.empty() ? 0 : 1);
   if (total > 0 && nMat == 0)

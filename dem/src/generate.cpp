@@ -439,4 +439,13 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
   }
 }
 
+SourceTotals sourceTotals(const std::vector<SourceInfo>& info) {
+  SourceTotals t;
+  for (const auto& s : info) {
+    if (s.count > 0) t.rmax = std::max(t.rmax, s.rmax);
+    t.count += s.count;
+  }
+  return t;
+}
+
 }  // namespace coloc::dem::detail

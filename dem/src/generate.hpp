@@ -76,6 +76,12 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
 /// Checks every source against the box and the materials (same verdict on every rank: throws
 /// ConfigError naming the key) and returns each source's particle count and largest radius.
 std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid, int nMaterials);
+/// Over the sources that place particles: the largest radius, and the count of all of them.
+struct SourceTotals {
+  double rmax = 0;
+  long long count = 0;
+};
+SourceTotals sourceTotals(const std::vector<SourceInfo>& info);
 
 /// Calls add() for every particle whose centre `owns` accepts; only sites near
 /// [blockLo, blockHi] are visited (list sources are scanned whole).

@@ -34,12 +34,9 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   const auto info = detail::inspectSources(cfg, grid, nMat);
   inflow = detail::inspectInflow(cfg, grid, nMat);
   seed = static_cast<std::uint64_t>(cfg.integer("particles.seed"));
-  double rmax = 0;
-  long long total = 0;
-  for (const auto& s : info) {
-    if (s.count > 0) rmax = std::max(rmax, s.rmax);
-    total += s.count;
-  }
+  const detail::SourceTotals totals = detail::sourceTotals(info);
+  double rmax = totals.rmax;
+  long long total = totals.count;
   inflowIdBase = total;
   flow.due.assign(inflow.size(), 0);
   flow.inserted.assign(inflow.size(), 0);
@@ -201,18 +198,13 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
 CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid, bool rows) {
   const int nMat = static_cast<int>(cfg.at("particles.materials").size());
   const auto info = detail::inspectSources(cfg, grid, nMat);
-  double rmax = 0;
-  long long total = 0;
-  for (const auto& s : info) {
-    if (s.count > 0) rmax = std::max(rmax, s.rmax);
-    total += s.count;
-  }
+  const detail::SourceTotals totals = detail::sourceTotals(info);
   CaseParticles out;
-  const double dmax = 2 * rmax;
+  const double dmax = 2 * totals.rmax;
   out.skin = cfg.number("particles.skin") * dmax;
   out.dmax = dmax;
   out.range = dmax + out.skin;
-  out.total = total;
+  out.total = totals.count;
   Real3 lo = grid.origin, hi{};
   for (int d = 0; d < 3; ++d) hi[d] = grid.origin[d] + grid.length[d];
   const auto all = [](const double*) { return true; };
