@@ -134,6 +134,135 @@ Decomposition Decomposition::fromCuts(const Comm& world, const GlobalGrid& grid,
   return dec;
 }
 
+Decomposition Decomposition::fromBoxes(const Comm& world, const GlobalGrid& grid,
+                                       std::vector<Int3> lo, std::vector<Int3> hi) {
+  const int P = world.size();
+  if (static_cast<int>(lo.size()) != P || static_cast<int>(hi.size()) != P)
+    throw ConfigError("partition.boxes",
+                      std::to_string(lo.size()) + " boxes for " + std::to_string(P) + " ranks");
+  for (int r = 0; r < P; ++r)
+    for (int d = 0; d < 3; ++d)
+      if (lo[r][d] < 0 || hi[r][d] > grid.cells[d] || hi[r][d] <= lo[r][d])
+        throw ConfigError("partition.boxes", "box of rank " + std::to_string(r) + " is empty or " +
+                                                 "leaves the grid along " + kAxis[d]);
+  Decomposition dec;
+  dec.grid_ = grid;
+  dec.boxLo_ = std::move(lo);
+  dec.boxHi_ = std::move(hi);
+  // The tree of cut planes: a region holding several boxes is split by a plane that no box
+  // crosses (the first such plane along x, then y, then z); a leaf's region must equal its box,
+  // so the boxes tile the grid exactly. Built alike on every rank from the same boxes.
+  std::vector<int> ranks(static_cast<std::size_t>(P));
+  for (int r = 0; r < P; ++r) ranks[static_cast<std::size_t>(r)] = r;
+  struct Item {
+    std::vector<int> ranks;
+    Int3 lo, hi;
+    int node;
+  };
+  dec.tree_.push_back({});
+  std::vector<Item> work{{std::move(ranks), Int3{0, 0, 0}, grid.cells, 0}};
+  while (!work.empty()) {
+    Item it = std::move(work.back());
+    work.pop_back();
+    const auto node = static_cast<std::size_t>(it.node);
+    if (it.ranks.size() == 1) {
+      const int r = it.ranks[0];
+      if (dec.boxLo_[static_cast<std::size_t>(r)] != it.lo ||
+          dec.boxHi_[static_cast<std::size_t>(r)] != it.hi)
+        throw ConfigError("partition.boxes",
+                          "the boxes do not tile the grid (rank " + std::to_string(r) + ")");
+      dec.tree_[node] = {-1, 0, r, r};
+      continue;
+    }
+    int axis = -1, plane = 0;
+    for (int d = 0; d < 3 && axis < 0; ++d) {
+      std::vector<std::pair<int, int>> spans;  // (lo, hi) along d
+      for (int r : it.ranks)
+        spans.emplace_back(dec.boxLo_[static_cast<std::size_t>(r)][d],
+                           dec.boxHi_[static_cast<std::size_t>(r)][d]);
+      std::sort(spans.begin(), spans.end());
+      int reach = spans[0].second;  // the highest face of the boxes starting before a plane
+      for (std::size_t i = 1; i < spans.size(); ++i) {
+        if (spans[i].first >= reach && spans[i].first > it.lo[d]) {
+          axis = d;
+          plane = spans[i].first;
+          break;
+        }
+        reach = std::max(reach, spans[i].second);
+      }
+    }
+    if (axis < 0)
+      throw ConfigError("partition.boxes",
+                        "the boxes overlap or cannot be separated by cut planes");
+    Item low{{}, it.lo, it.hi, 0}, high{{}, it.lo, it.hi, 0};
+    low.hi[axis] = plane;
+    high.lo[axis] = plane;
+    for (int r : it.ranks)
+      (dec.boxHi_[static_cast<std::size_t>(r)][axis] <= plane ? low : high).ranks.push_back(r);
+    low.node = static_cast<int>(dec.tree_.size());
+    high.node = low.node + 1;
+    dec.tree_[node] = {axis, plane, low.node, high.node};
+    dec.tree_.push_back({});
+    dec.tree_.push_back({});
+    work.push_back(std::move(low));
+    work.push_back(std::move(high));
+  }
+  auto* c = new MPI_Comm(MPI_COMM_NULL);
+  MPI_Comm_dup(world.raw(), c);
+  dec.cart_ = std::shared_ptr<MPI_Comm>(c, [](MPI_Comm* p) {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized && *p != MPI_COMM_NULL) MPI_Comm_free(p);
+    delete p;
+  });
+  dec.comm_ = Comm(*dec.cart_);
+  dec.rank_ = dec.comm_.rank();
+  dec.size_ = dec.comm_.size();
+  dec.lo_ = dec.boxLo_[static_cast<std::size_t>(dec.rank_)];
+  dec.hi_ = dec.boxHi_[static_cast<std::size_t>(dec.rank_)];
+  return dec;
+}
+
+void Decomposition::requireGrid(const char* what) const {
+  if (isTiled())
+    throw Error(std::string("Decomposition::") + what +
+                " is not defined on a tiled layout (use the box neighbours)");
+}
+
+Int3 Decomposition::dims() const {
+  requireGrid("dims");
+  return dims_;
+}
+
+Int3 Decomposition::coords() const {
+  requireGrid("coords");
+  return coords_;
+}
+
+const std::array<std::vector<int>, 3>& Decomposition::cuts() const {
+  requireGrid("cuts");
+  return cuts_;
+}
+
+int Decomposition::neighbor(int d, int side) const {
+  requireGrid("neighbor");
+  return nbr_[d][side > 0 ? 1 : 0];
+}
+
+void Decomposition::boxes(std::vector<Int3>& lo, std::vector<Int3>& hi) const {
+  if (isTiled()) {
+    lo = boxLo_;
+    hi = boxHi_;
+    return;
+  }
+  lo.resize(static_cast<std::size_t>(size_));
+  hi.resize(static_cast<std::size_t>(size_));
+  for (int r = 0; r < size_; ++r) {
+    lo[static_cast<std::size_t>(r)] = loOf(r);
+    hi[static_cast<std::size_t>(r)] = hiOf(r);
+  }
+}
+
 void Decomposition::build(const Comm& world) {
   int periods[3] = {grid_.periodic[0], grid_.periodic[1], grid_.periodic[2]};
   auto* c = new MPI_Comm(MPI_COMM_NULL);
@@ -177,24 +306,28 @@ Real3 Decomposition::blockHi() const {
 }
 
 int Decomposition::rankOfCoords(Int3 c) const {
+  requireGrid("rankOfCoords");
   int r = 0;
   MPI_Cart_rank(*cart_, c.data(), &r);
   return r;
 }
 
 Int3 Decomposition::coordsOfRank(int r) const {
+  requireGrid("coordsOfRank");
   Int3 c{};
   MPI_Cart_coords(*cart_, r, 3, c.data());
   return c;
 }
 
 Int3 Decomposition::loOf(int r) const {
+  if (isTiled()) return boxLo_[static_cast<std::size_t>(r)];
   const auto c = coordsOfRank(r);
   return {cuts_[0][static_cast<std::size_t>(c[0])], cuts_[1][static_cast<std::size_t>(c[1])],
           cuts_[2][static_cast<std::size_t>(c[2])]};
 }
 
 Int3 Decomposition::hiOf(int r) const {
+  if (isTiled()) return boxHi_[static_cast<std::size_t>(r)];
   const auto c = coordsOfRank(r);
   return {cuts_[0][static_cast<std::size_t>(c[0]) + 1],
           cuts_[1][static_cast<std::size_t>(c[1]) + 1],
@@ -213,7 +346,15 @@ int Decomposition::ownerOfCell(Int3 cell) const {
     const int n = grid_.cells[d];
     if (grid_.periodic[d]) i = ((i % n) + n) % n;
     if (i < 0 || i >= n) return -1;
-    b[d] = blockAlong(d, i);
+    cell[d] = i;
+    if (!isTiled()) b[d] = blockAlong(d, i);
+  }
+  if (isTiled()) {
+    const Node* node = &tree_[0];
+    while (node->axis >= 0)
+      node =
+          &tree_[static_cast<std::size_t>(cell[node->axis] < node->plane ? node->low : node->high)];
+    return node->low;
   }
   return rankOfCoords(b);
 }

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "coloc/core/error.hpp"
+#include "coloc/partition/box_halo.hpp"
 
 namespace coloc {
 namespace {
@@ -42,6 +43,14 @@ void unpack(std::span<Field3<double>* const> fields, const IndexBox& b, const do
 
 HaloPlan::HaloPlan(const Decomposition& dec, const FieldLayout& layout)
     : dec_(&dec), layout_(layout), me_(dec.rank()) {
+  if (dec.isTiled()) {
+    BoxLayout l{dec.grid(), {}};
+    std::vector<Int3> lo, hi;
+    dec.boxes(lo, hi);
+    for (std::size_t r = 0; r < lo.size(); ++r) l.box.push_back({lo[r], hi[r]});
+    box_ = std::make_shared<BoxHaloPlan>(dec.comm(), l, layout);
+    return;
+  }
   const int g = layout.ghost;
   const IndexBox all = layout.allocated();
   for (int d = 0; d < 3; ++d) {
@@ -84,6 +93,7 @@ void HaloPlan::ensureBuffers(std::size_t nFields) {
 }
 
 long long HaloPlan::bytesPerGather() const {
+  if (box_) return box_->bytesPerGather();
   long long b = 0;
   for (int d = 0; d < 3; ++d)
     for (int s = 0; s < 2; ++s)
@@ -151,6 +161,11 @@ void HaloPlan::sweep(int d, std::span<Field3<double>* const> fields, bool revers
 }
 
 bool HaloPlan::crossesRanks() const {
+  if (box_) {
+    for (int q : box_->neighbours())
+      if (q != me_) return true;
+    return false;
+  }
   for (const auto& d : sides_)
     for (const auto& side : d)
       if (side.peer != MPI_PROC_NULL && side.peer != me_) return true;
@@ -185,12 +200,14 @@ void HaloPlan::fold(int d, std::span<Field3<double>* const> fields) {
 
 void HaloPlan::gather(std::span<Field3<double>* const> fields, Timers* timers, Exchange kind,
                       Traffic traffic) {
+  if (box_) return box_->gather(fields, timers, kind, traffic);
   ensureBuffers(fields.size());
   for (int d = 0; d < 3; ++d) sweep(d, fields, /*reverse=*/false, timers, kind, traffic);
 }
 
 void HaloPlan::scatterSum(std::span<Field3<double>* const> fields, Fold f, Timers* timers,
                           Exchange kind, Traffic traffic) {
+  if (box_) return box_->scatterSum(fields, f, timers, kind, traffic);
   ensureBuffers(fields.size());
   for (int d = 2; d >= 0; --d) {
     sweep(d, fields, /*reverse=*/true, timers, kind, traffic);

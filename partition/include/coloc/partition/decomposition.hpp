@@ -7,6 +7,12 @@
 // possible (the first N mod P blocks get one more cell); the balanced strategy passes its own
 // cuts. Cells are the unit: a block edge is always a cell face.
 //
+// A tiled decomposition (fromBoxes, partition/tiled.hpp) has no process grid: rank r owns any box
+// of whole cells, the boxes tile the grid, and the owner of a cell is found by walking the tree
+// of cut planes that separates the boxes (O(log P), no per-cell map). On a tiled decomposition
+// dims(), coords(), cuts(), neighbor(), rankOfCoords() and coordsOfRank() throw Error: the
+// exchanges use the box neighbours (partition/box_halo.hpp) instead.
+//
 // Face ownership (staggered fields): along axis d, the face with global index f (the low face of
 // cell f) belongs to the block that owns cell f. The last face of a non-periodic axis (f = N_d)
 // belongs to the last block. On a periodic axis face N_d is face 0.
@@ -43,6 +49,11 @@ class Decomposition {
   /// Blocks from explicit cuts (each axis: 0 = c_0 < c_1 < ... < c_P = N).
   static Decomposition fromCuts(const Comm& world, const GlobalGrid& grid,
                                 std::array<std::vector<int>, 3> cuts);
+  /// General boxes: rank r owns the global cells [lo[r], hi[r]). The boxes must tile the grid
+  /// and be separable by cut planes (recursive bisection layouts and process grids are);
+  /// otherwise ConfigError (key partition.boxes).
+  static Decomposition fromBoxes(const Comm& world, const GlobalGrid& grid, std::vector<Int3> lo,
+                                 std::vector<Int3> hi);
   /// The process grid the uniform strategy uses for `size` ranks (non-zero entries are kept):
   /// MPI_Dims_create's, the largest count on the axis with the most cells, when the even split
   /// then leaves every block at least `minCells` cells along every axis; otherwise the legal
@@ -56,9 +67,11 @@ class Decomposition {
   int rank() const { return rank_; }
   int size() const { return size_; }
   const GlobalGrid& grid() const { return grid_; }
-  Int3 dims() const { return dims_; }
-  Int3 coords() const { return coords_; }
-  const std::array<std::vector<int>, 3>& cuts() const { return cuts_; }
+  /// True for a layout of general boxes (fromBoxes), false for a process grid.
+  bool isTiled() const { return !tree_.empty(); }
+  Int3 dims() const;
+  Int3 coords() const;
+  const std::array<std::vector<int>, 3>& cuts() const;
 
   /// Global cell range [lo, hi) of this block, and its size.
   Int3 lo() const { return lo_; }
@@ -71,16 +84,18 @@ class Decomposition {
 
   /// Neighbour rank across the low (side = -1) or high (side = +1) face along `d`, with
   /// periodic wrap; MPI_PROC_NULL at a non-periodic box face.
-  int neighbor(int d, int side) const { return nbr_[d][side > 0 ? 1 : 0]; }
+  int neighbor(int d, int side) const;
   /// True when this block touches a non-periodic face of the box (a physical boundary).
-  bool atLowBoundary(int d) const { return !grid_.periodic[d] && coords_[d] == 0; }
-  bool atHighBoundary(int d) const { return !grid_.periodic[d] && coords_[d] == dims_[d] - 1; }
+  bool atLowBoundary(int d) const { return !grid_.periodic[d] && lo_[d] == 0; }
+  bool atHighBoundary(int d) const { return !grid_.periodic[d] && hi_[d] == grid_.cells[d]; }
 
   int rankOfCoords(Int3 c) const;
   Int3 coordsOfRank(int r) const;
   /// Global cell range of any rank's block.
   Int3 loOf(int r) const;
   Int3 hiOf(int r) const;
+  /// Every rank's box, rank order (computed from the cuts on a process grid).
+  void boxes(std::vector<Int3>& lo, std::vector<Int3>& hi) const;
   /// Owner of a global cell (wrapped on periodic axes); -1 if outside a non-periodic box.
   int ownerOfCell(Int3 cell) const;
   /// Owner of the face f along axis d in the transverse cell (j, k) (see header comment).
@@ -93,7 +108,15 @@ class Decomposition {
  private:
   Decomposition() = default;
   void build(const Comm& world);
+  void requireGrid(const char* what) const;
   int blockAlong(int d, int cell) const;
+  // Tiled layouts: the boxes and the tree of cut planes (node: axis, plane, low / high child;
+  // a leaf has axis -1 and holds the rank in `low`).
+  struct Node {
+    int axis = -1, plane = 0, low = 0, high = 0;
+  };
+  std::vector<Int3> boxLo_, boxHi_;
+  std::vector<Node> tree_;
   GlobalGrid grid_;
   std::shared_ptr<MPI_Comm> cart_;
   Comm comm_;

@@ -11,8 +11,11 @@
 //               coupling_deposit phase (arithmetic inside the block, not an exchange).
 // Buffers are allocated on first use for the largest field count seen and never again.
 // Every message is booked in the Timers ledger under the exchange kind the caller names.
+// On a tiled decomposition the plan holds a BoxHaloPlan (partition/box_halo.hpp) and forwards
+// both operations to it: one message per box neighbour, same results (sums to rounding).
 #pragma once
 
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -23,6 +26,7 @@
 namespace coloc {
 
 enum class Fold { Keep, Mirror };
+class BoxHaloPlan;
 
 class HaloPlan {
  public:
@@ -64,6 +68,7 @@ class HaloPlan {
   void fold(int d, std::span<Field3<double>* const> fields);
   void ensureBuffers(std::size_t nFields);
 
+  std::shared_ptr<BoxHaloPlan> box_;  // tiled layouts: the general box plan does the work
   const Decomposition* dec_ = nullptr;
   FieldLayout layout_;
   int me_ = 0;
