@@ -5,6 +5,8 @@
 //  each after a few hundred steps: every particle exactly once, positions within 1e-10 of the
 //  box edge, velocities and angular velocities within 1e-10 of their largest value, the same
 //  contact histories (count per holder and partner equal, shear within 1e-10 of the largest).
+//  - the serial run's state restored onto the boxes (all of it given to rank 0) continues as
+//    the serial run does (1e-10);
 //  - a particle moved across a box corner (into a box sharing no face with its own where the
 //    layout has one) and one across the corner of a periodic box land on the owners of their
 //    new (wrapped) positions.
@@ -27,8 +29,9 @@ using demtest::Case;
 const coloc::Comm kSelf(MPI_COMM_SELF);
 
 /// The case's grid split by tiledBoxes over this run's ranks, on a cost 20x heavier in the cells
-/// with i < ni and k < nk (a cluster in a corner of the x-z plane).
-Decomposition tiled(const std::string& text, int ni, int nk) {
+/// with i < ni and k < nk (a cluster in a corner of the x-z plane); box bounds on multiples of
+/// `granularity` cells (DEM bins of several cells).
+Decomposition tiled(const std::string& text, int ni, int nk, int granularity = 1) {
   const GlobalGrid g = coloc::gridFromConfig(demtest::config(text));
   const coloc::Comm world = coloc::Comm::world();
   std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 1.0);
@@ -37,7 +40,9 @@ Decomposition tiled(const std::string& text, int ni, int nk) {
       for (int i = 0; i < g.cells[0]; ++i)
         if (i < ni && k < nk)
           cost[static_cast<std::size_t>(i + g.cells[0] * (j + g.cells[1] * k))] += 20.0;
-  const auto layout = coloc::tiledBoxes(g, cost, world.size()).layout;
+  coloc::TiledOptions opt;
+  opt.granularity = granularity;
+  const auto layout = coloc::tiledBoxes(g, cost, world.size(), opt).layout;
   std::vector<Int3> lo, hi;
   for (const auto& b : layout.box) {
     lo.push_back(b.lo);
@@ -48,8 +53,8 @@ Decomposition tiled(const std::string& text, int ni, int nk) {
 
 /// Runs `steps` sub-steps of the case on the tiled layout and serially, and compares.
 void matchSerial(const std::string& name, const std::string& text, long n, double length, int steps,
-                 int ni, int nk) {
-  Case par(text, tiled(text, ni, nk));
+                 int ni, int nk, int granularity = 1) {
+  Case par(text, tiled(text, ni, nk, granularity));
   Case ser(text, kSelf, {1, 1, 1});
   ASSERT_TRUE(par.dec.isTiled());
   // owner of every particle at the start, to count those that changed rank
@@ -148,6 +153,45 @@ const char* kGas = R"({
 
 TEST(DemTiled, PeriodicGasMatchesSerial) {
   matchSerial("gas", kGas, 400, 0.03, 400, 3, 3);
+}
+
+TEST(DemTiled, ThinBoxesOfTwoCellBinsMatchSerial) {
+  // cells smaller than the range along x and z: bins of 2 cells, boxes on even cells, one bin
+  // thick at the most ranks (a particle can be a ghost on both sides of its box)
+  std::string text = kGas;
+  const std::string key = R"("cells": [6, 4, 6])";
+  text.replace(text.find(key), key.size(), R"("cells": [16, 8, 16])");
+  matchSerial("gas, bins of 2 cells", text, 400, 0.03, 300, 6, 6, 2);
+}
+
+TEST(DemTiled, RestoredOntoBoxesMatchesSerial) {
+  // the serial run's state at step 150 (rebuilt first, with its histories) given to rank 0 of
+  // the tiled layout only: the restore sends each particle and history to the owner of its box
+  const long n = 300;
+  Case ser(kBed, kSelf, {1, 1, 1});
+  for (int s = 0; s < 150; ++s) ser.dem->substep();
+  coloc::dem::DemState st = ser.dem->saveState();
+  Case par(kBed, tiled(kBed, 4, 3));
+  if (!par.dec.comm().isRoot()) {
+    st.particles = coloc::dem::ParticleStore{};
+    st.contacts.clear();
+    st.contactRow.clear();
+  }
+  par.dem = std::make_unique<coloc::dem::DemSolver>(par.dec, par.cfg, par.timers, std::move(st));
+  for (int s = 0; s < 150; ++s) {
+    par.dem->substep();
+    ser.dem->substep();
+  }
+  const demtest::TableDiff diff =
+      demtest::compare(demtest::table(par, n), demtest::table(ser, n), 0.04);
+  if (par.dec.comm().isRoot())
+    std::printf("restored onto %d boxes: max |dx|/L %.3e, |dv|/max|v| %.3e, |dw|/max|w| %.3e\n",
+                par.dec.size(), diff.x, diff.v, diff.omega);
+  EXPECT_EQ(par.dem->globalCount(), n);
+  EXPECT_EQ(diff.countsDiffer, 0);
+  EXPECT_LE(diff.x, 1e-10);
+  EXPECT_LE(diff.v, 1e-10);
+  EXPECT_LE(diff.omega, 1e-10);
 }
 
 // ---------------------------------------------------------------------------------------------
