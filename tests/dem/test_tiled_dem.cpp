@@ -5,6 +5,7 @@
 //  each after a few hundred steps: every particle exactly once, positions within 1e-10 of the
 //  box edge, velocities and angular velocities within 1e-10 of their largest value, the same
 //  contact histories (count per holder and partner equal, shear within 1e-10 of the largest).
+//  - a process grid given as boxes: the same ghosts as the sweeps deliver, the same results;
 //  - the serial run's state restored onto the boxes (all of it given to rank 0) continues as
 //    the serial run does (1e-10);
 //  - a particle moved across a box corner (into a box sharing no face with its own where the
@@ -162,6 +163,42 @@ TEST(DemTiled, ThinBoxesOfTwoCellBinsMatchSerial) {
   const std::string key = R"("cells": [6, 4, 6])";
   text.replace(text.find(key), key.size(), R"("cells": [16, 8, 16])");
   matchSerial("gas, bins of 2 cells", text, 400, 0.03, 300, 6, 6, 2);
+}
+
+TEST(DemTiled, ProcessGridAsBoxesHasTheSweepsGhosts) {
+  // the uniform process grid and the same blocks as a tiled layout: the sweeps and the targets
+  // deliver the same ghosts to every rank, and the runs agree bit for bit
+  // (a box long enough along x for a process grid of up to 7 ranks)
+  const long n = 400;
+  std::string text = kGas;
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{R"("length": [0.03, 0.02, 0.03], "cells": [6, 4, 6])",
+                                            R"("length": [0.07, 0.02, 0.03], "cells": [14, 4, 6])"},
+        {R"("hi": [0.03, 0.02, 0.03])", R"("hi": [0.07, 0.02, 0.03])"}})
+    text.replace(text.find(from), from.size(), to);
+  Case cart(text);
+  std::vector<Int3> lo, hi;
+  cart.dec.boxes(lo, hi);
+  Case boxes(text, Decomposition::fromBoxes(coloc::Comm::world(), cart.dec.grid(), lo, hi));
+  ASSERT_FALSE(cart.dec.isTiled());
+  ASSERT_TRUE(boxes.dec.isTiled());
+  long long ghostsDiffer = 0;
+  for (int s = 0; s < 300; ++s) {
+    cart.dem->substep();
+    boxes.dem->substep();
+    ghostsDiffer += cart.p().nGhost != boxes.p().nGhost;
+  }
+  const auto tc = demtest::table(cart, n);
+  const auto tb = demtest::table(boxes, n);
+  long differ = 0;
+  for (std::size_t k = 0; k < tc.size(); ++k) differ += tc[k] != tb[k];
+  const long long ghosts = cart.dec.comm().sum(static_cast<long long>(cart.p().nGhost));
+  if (cart.dec.comm().isRoot())
+    std::printf("process grid %d x %d x %d as boxes: %lld ghosts, %ld values differ\n",
+                cart.dec.dims()[0], cart.dec.dims()[1], cart.dec.dims()[2], ghosts, differ);
+  EXPECT_EQ(cart.dec.comm().sum(ghostsDiffer), 0);
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(ghosts, 0);
 }
 
 TEST(DemTiled, RestoredOntoBoxesMatchesSerial) {
