@@ -15,61 +15,55 @@
 #include "coloc/dem/dem.hpp"
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/setup.hpp"
+#include "coloc/partition/strategy.hpp"
 #include "run.hpp"
 
 namespace coloc {
 namespace {
 
-/// One strategy's blocks for N ranks: fluid cuts and particle cuts (the same but in independent).
+/// One strategy's layout for N ranks: every rank's fluid box and particle box (the same but in
+/// independent), and the layout's shape for the table.
 struct Plan {
   std::string strategy;
-  std::array<std::vector<int>, 3> fluidCuts, particleCuts;
+  std::vector<IndexBox> fluid, particles;
+  std::string fluidShape, particleShape;  // "2x1x3" (a process grid) or "7 boxes" (tiled)
+  std::array<std::vector<int>, 3> fluidCuts, particleCuts;  // process grids only (--verbose)
   std::string error;  // the strategy cannot lay out this case on N ranks
 };
 
-Int3 dimsOf(const std::array<std::vector<int>, 3>& cuts) {
-  return {static_cast<int>(cuts[0].size()) - 1, static_cast<int>(cuts[1].size()) - 1,
-          static_cast<int>(cuts[2].size()) - 1};
+std::vector<IndexBox> boxesOf(const Blocks& b) {
+  std::vector<IndexBox> out;
+  for (int r = 0; r < b.size(); ++r) out.push_back({b.lo(r), b.hi(r)});
+  return out;
 }
 
-/// Sum of `perCell` (x fastest) over each block of `cuts`, block rank order x fastest.
-std::vector<double> blockSums(const GlobalGrid& g, const std::array<std::vector<int>, 3>& cuts,
-                              const std::vector<double>& perCell) {
-  const Int3 d = dimsOf(cuts);
-  std::vector<double> out(static_cast<std::size_t>(d[0] * d[1] * d[2]), 0.0);
-  std::array<std::vector<int>, 3> blockOf;
-  for (int a = 0; a < 3; ++a) {
-    blockOf[a].resize(static_cast<std::size_t>(g.cells[a]));
-    for (int b = 0; b < d[a]; ++b)
-      for (int c = cuts[a][b]; c < cuts[a][b + 1]; ++c) blockOf[a][c] = b;
+std::string shapeOf(const Blocks& b) {
+  return std::to_string(b.dims[0]) + "x" + std::to_string(b.dims[1]) + "x" +
+         std::to_string(b.dims[2]);
+}
+
+/// Sum of `perCell` (x fastest) over each box.
+std::vector<double> boxSums(const GlobalGrid& g, const std::vector<IndexBox>& boxes,
+                            const std::vector<double>& perCell) {
+  std::vector<double> out;
+  for (const auto& b : boxes) {
+    double sum = 0;
+    forEach(b, [&](int i, int j, int k) {
+      sum += perCell[static_cast<std::size_t>(i + g.cells[0] * (j + 1LL * g.cells[1] * k))];
+    });
+    out.push_back(sum);
   }
-  for (int k = 0; k < g.cells[2]; ++k)
-    for (int j = 0; j < g.cells[1]; ++j)
-      for (int i = 0; i < g.cells[0]; ++i) {
-        const int b = blockOf[0][i] + d[0] * (blockOf[1][j] + d[1] * blockOf[2][k]);
-        out[static_cast<std::size_t>(b)] +=
-            perCell[static_cast<std::size_t>(i + g.cells[0] * (j + 1LL * g.cells[1] * k))];
-      }
   return out;
 }
 
-std::vector<long long> blockCells(const std::array<std::vector<int>, 3>& cuts) {
-  const Int3 d = dimsOf(cuts);
+Int3 extent(const IndexBox& b) {
+  return {b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]};
+}
+
+std::vector<long long> boxCells(const std::vector<IndexBox>& boxes) {
   std::vector<long long> out;
-  for (int k = 0; k < d[2]; ++k)
-    for (int j = 0; j < d[1]; ++j)
-      for (int i = 0; i < d[0]; ++i)
-        out.push_back(1LL * (cuts[0][i + 1] - cuts[0][i]) * (cuts[1][j + 1] - cuts[1][j]) *
-                      (cuts[2][k + 1] - cuts[2][k]));
+  for (const auto& b : boxes) out.push_back(b.volume());
   return out;
-}
-
-Int3 blockExtent(const std::array<std::vector<int>, 3>& cuts, int r) {
-  const Int3 d = dimsOf(cuts);
-  const int c[3] = {r % d[0], (r / d[0]) % d[1], r / (d[0] * d[1])};
-  Int3 e{};
-  for (int a = 0; a < 3; ++a) e[a] = cuts[a][c[a] + 1] - cuts[a][c[a]];
-  return e;
 }
 
 std::string g6(double v) {
@@ -166,15 +160,28 @@ int checkCase(const CheckOptions& opts) {
   for (std::size_t c = 0; c < caseCost.size(); ++c)
     caseCost[c] = caseModel.perCell + caseModel.perParticle * particlesPerCell[c];
   std::vector<Plan> plans;
-  for (const char* s : {"uniform", "balanced", "independent"}) {
+  for (const char* s : {"uniform", "balanced", "independent", "tiled"}) {
     Plan p;
     p.strategy = s;
     try {
-      // As Simulation::chooseLayouts: a fluid-only run keeps the uniform blocks.
-      const std::string used = mode == RunMode::FluidOnly ? "uniform" : p.strategy;
-      const StrategyBlocks b = chooseBlocks(used, in, caseCost, particlesPerCell);
-      p.fluidCuts = b.fluid.cuts;
-      p.particleCuts = b.particles ? b.particles->cuts : b.fluid.cuts;
+      // As Simulation::chooseLayouts: a fluid-only run keeps the uniform blocks (tiled: boxes
+      // of equal cell counts).
+      const std::string used =
+          mode == RunMode::FluidOnly && p.strategy != "tiled" ? "uniform" : p.strategy;
+      if (used == "tiled") {
+        const TiledLayout t = tiledStrategy(in, caseCost, cfg.number("partition.cost.halo_cell"));
+        p.fluid = p.particles = t.layout.box;
+        p.fluidShape = p.particleShape = std::to_string(N) + " boxes";
+      } else {
+        const StrategyBlocks b = chooseBlocks(used, in, caseCost, particlesPerCell);
+        const Blocks& pb = b.particles ? *b.particles : b.fluid;
+        p.fluid = boxesOf(b.fluid);
+        p.particles = boxesOf(pb);
+        p.fluidShape = shapeOf(b.fluid);
+        p.particleShape = shapeOf(pb);
+        p.fluidCuts = b.fluid.cuts;
+        p.particleCuts = pb.cuts;
+      }
     } catch (const Error& e) {
       p.error = e.what();
     }
@@ -196,26 +203,24 @@ int checkCase(const CheckOptions& opts) {
                   p.error.c_str());
       continue;
     }
-    const auto cells = blockCells(p.fluidCuts);
-    const auto parts = blockSums(g, p.particleCuts, particlesPerCell);
-    const auto cost = blockSums(g, p.fluidCuts, caseCost);
+    const auto cells = boxCells(p.fluid);
+    const auto parts = boxSums(g, p.particles, particlesPerCell);
+    const auto cost = boxSums(g, p.fluid, caseCost);
     const double avg =
         std::accumulate(cost.begin(), cost.end(), 0.0) / static_cast<double>(cost.size());
     const double imb = avg > 0 ? *std::max_element(cost.begin(), cost.end()) / avg : 1.0;
     double mem = 0;
     for (int r = 0; r < N; ++r)
-      mem = std::max(mem, coupling::estimateMemory(cfg, blockExtent(p.fluidCuts, r),
-                                                   parts[static_cast<std::size_t>(r)])
-                              .total());
+      mem =
+          std::max(mem, coupling::estimateMemory(cfg, extent(p.fluid[static_cast<std::size_t>(r)]),
+                                                 parts[static_cast<std::size_t>(r)])
+                            .total());
     if (chosen) caseMem = mem;
-    const Int3 fd = dimsOf(p.fluidCuts), pd = dimsOf(p.particleCuts);
-    char fdims[48], pdims[48];
-    std::snprintf(fdims, sizeof fdims, "%dx%dx%d", fd[0], fd[1], fd[2]);
-    std::snprintf(pdims, sizeof pdims, "%dx%dx%d", pd[0], pd[1], pd[2]);
     std::printf("%s %-12s %-9s %-9s %-20s %-20s %-10.3f %s\n", chosen ? "*" : " ",
-                p.strategy.c_str(), fdims, pdims, minMax(cells).c_str(), minMax(parts).c_str(), imb,
+                p.strategy.c_str(), p.fluidShape.c_str(), p.particleShape.c_str(),
+                minMax(cells).c_str(), minMax(parts).c_str(), imb,
                 coupling::bytesText(mem).c_str());
-    if (opts.verbose) {
+    if (opts.verbose && !p.fluidCuts[0].empty()) {
       for (int a = 0; a < 3; ++a) {
         std::printf("      cuts %c:", "xyz"[a]);
         for (int c : p.fluidCuts[a]) std::printf(" %d", c);

@@ -420,11 +420,11 @@ int runCase(const Comm& world, const RunOptions& opts) {
     if (root && !opts.quiet) {
       const auto& dec = simulation->decomposition();
       std::printf(
-          "coloc: case '%s', mode %s, %d rank(s) as %dx%dx%d, %lld cells, %lld particles, "
+          "coloc: case '%s', mode %s, %d rank(s) as %s, %lld cells, %lld particles, "
           "set-up %.2f s\n",
-          cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(), dec.dims()[0],
-          dec.dims()[1], dec.dims()[2], static_cast<long long>(dec.grid().cellCount()),
-          particleCount, setupWall);
+          cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(),
+          dec.shape().c_str(), static_cast<long long>(dec.grid().cellCount()), particleCount,
+          setupWall);
       if (!opts.restart.empty())
         std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
                     simulation->steps(), simulation->time());
@@ -486,12 +486,10 @@ int runCase(const Comm& world, const RunOptions& opts) {
               output->rebind(simulation->decomposition());
               ++rebalances;
               if (root && !opts.quiet) {
-                const auto& d = simulation->decomposition().dims();
                 std::printf(
-                    "coloc: step %lld: re-balanced onto %dx%dx%d blocks, modelled imbalance "
-                    "%.3f -> %.3f\n",
-                    simulation->steps(), d[0], d[1], d[2], plan.currentImbalance,
-                    plan.newImbalance);
+                    "coloc: step %lld: re-balanced onto %s, modelled imbalance %.3f -> %.3f\n",
+                    simulation->steps(), simulation->decomposition().shape().c_str(),
+                    plan.currentImbalance, plan.newImbalance);
               }
             }
           }

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Compare partition strategies (uniform, balanced, independent) on one case over rank counts.
+"""Compare partition strategies (uniform, balanced, independent, tiled) on one case over rank counts.
 
     bench/scripts/strategies.py bench/cases/clustered.json --ranks 2 4 8 \
         --out bench/results/strategies-clustered [--set run.steps=20 ...]
@@ -30,14 +30,22 @@ import matplotlib.pyplot as plt  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
+def layout_name(part, key):
+    """'2x1x2' for a process grid, 'N boxes' for a tiled layout (no grid: null dims)."""
+    dims = part.get(key)
+    if dims is None:
+        return "%d boxes" % len(part.get("boxes", []))
+    return "x".join(map(str, dims))
+
+
 def row_of(r, s, n, rep, cores):
     steps = max(r["run"]["steps"], 1)
     ex = r["exchange"]
     wall = max(r["run"]["wall_s"], 1e-300)
     return {
         "strategy": s, "ranks": n, "repeat": rep, "oversubscribed": int(n > cores), "steps": steps,
-        "fluid_dims": "x".join(map(str, r["partition"]["fluid_dims"])),
-        "particle_dims": "x".join(map(str, r["partition"]["particle_dims"])),
+        "fluid_dims": layout_name(r["partition"], "fluid_dims"),
+        "particle_dims": layout_name(r["partition"], "particle_dims"),
         "busy_max_per_step": r["load"]["busy_s_max"] / steps,
         "busy_avg_per_step": r["load"]["busy_s_avg"] / steps,
         "imbalance": r["load"]["imbalance"],
@@ -56,7 +64,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("case")
     p.add_argument("--ranks", type=int, nargs="+", default=[2, 4, 8])
-    p.add_argument("--strategies", nargs="+", default=["uniform", "balanced", "independent"])
+    p.add_argument("--strategies", nargs="+", default=["uniform", "balanced", "independent", "tiled"])
     p.add_argument("--repeat", type=int, default=1, help="runs per point (bands: min-max)")
     p.add_argument("--launcher", default="mpiexec -n {n} --bind-to none")
     p.add_argument("--coloc", default=os.path.join(ROOT, "build", "coloc"))
@@ -114,7 +122,7 @@ def main():
         positive = [scale * r[key] for r in rows if isinstance(r.get(key), float) and r[key] > 0]
         floor = (min(positive) if positive else 1.0) / 10 if logy else 0.0
         zeros = False
-        for s, st in zip(a.strategies, ("o-", "s--", "^:")):
+        for s, st in zip(a.strategies, ("o-", "s--", "^:", "d-.")):
             by = {}
             for r in rows:
                 if r["strategy"] == s:

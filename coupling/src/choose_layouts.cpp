@@ -43,12 +43,19 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
 
 Layouts chooseLayouts(const Comm& world, const Config& cfg) {
   const std::string strategy = cfg.string("partition.strategy");
-  if (cfg.integer("partition.rebalance_interval") > 0 && strategy != "balanced")
+  if (cfg.integer("partition.rebalance_interval") > 0 && strategy != "balanced" &&
+      strategy != "tiled")
     throw ConfigError("partition.rebalance_interval",
-                      "re-balancing moves the cuts of the balanced strategy: set "
-                      "partition.strategy to balanced (it is '" +
+                      "re-balancing moves the cuts of the balanced or tiled strategies: set "
+                      "partition.strategy to balanced or tiled (it is '" +
                           strategy + "')");
   const Decomposition uniform = decompositionFromConfig(world, cfg);
+  if (strategy == "tiled" && runMode(cfg) == RunMode::FluidOnly) {
+    // No particles: boxes of equal cell counts, for any rank count.
+    std::vector<double> cells;
+    if (world.isRoot()) cells.assign(static_cast<std::size_t>(uniform.grid().cellCount()), 1.0);
+    return tiledLayoutsOnRoot(world, cfg, cells, CostModel{1.0, 0.0});
+  }
   Layouts L{uniform, std::nullopt, strategy, CostModel{}, 1.0, 1.0};
   if (strategy == "uniform" || runMode(cfg) == RunMode::FluidOnly) return L;
   const bool independent = strategy == "independent";
@@ -61,6 +68,7 @@ Layouts chooseLayouts(const Comm& world, const Config& cfg) {
   // independent: the DEM's blocks are balanced by particle count.
   const std::vector<double> cost =
       probeCellCostsOnRoot(cfg, uniform, independent ? CostModel{0.0, 1.0} : model);
+  if (strategy == "tiled") return tiledLayoutsOnRoot(world, cfg, cost, model);
   const StrategyInput in = strategyInput(cfg, world.size());
   const StrategyBlocks b = chooseBlocksOnRoot(world, strategy, in, cost, independent);
   if (independent) {

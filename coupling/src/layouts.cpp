@@ -73,6 +73,67 @@ StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
   return b;
 }
 
+Layouts tiledLayoutsOnRoot(const Comm& comm, const Config& cfg, const std::vector<double>& cost,
+                           const CostModel& model, const Decomposition* current,
+                           std::array<double, 2>* verdict) {
+  const StrategyInput in = strategyInput(cfg, comm.size());
+  const int P = comm.size();
+  std::vector<int> packed(static_cast<std::size_t>(6 * P));
+  double imb[4] = {1.0, 1.0, 1.0, 1.0};  // new, uniform, current, gain
+  std::string err;
+  if (comm.isRoot()) {
+    try {
+      const double surface = cfg.number("partition.cost.halo_cell");
+      const TiledLayout t = tiledStrategy(in, cost, surface);
+      if (current) {
+        TiledLayout now;
+        now.layout.grid = in.grid;
+        std::vector<Int3> lo, hi;
+        current->boxes(lo, hi);
+        for (std::size_t r = 0; r < lo.size(); ++r) now.layout.box.push_back({lo[r], hi[r]});
+        TiledOptions opt;
+        opt.surfaceCost = surface;
+        evaluateBoxes(cost, opt, now);
+        imb[2] = now.imbalance();
+        imb[3] = t.maxCost > 0 ? now.maxCost / t.maxCost : 1.0;
+      }
+      for (int r = 0; r < P; ++r)
+        for (int d = 0; d < 3; ++d) {
+          packed[static_cast<std::size_t>(6 * r + d)] =
+              t.layout.box[static_cast<std::size_t>(r)].lo[d];
+          packed[static_cast<std::size_t>(6 * r + 3 + d)] =
+              t.layout.box[static_cast<std::size_t>(r)].hi[d];
+        }
+      BalancedLayout even;
+      const Blocks u = uniformBlocks(in);
+      even.dims = u.dims;
+      even.cuts = u.cuts;
+      evaluateLayout(in.grid, cost, even);
+      imb[0] = t.imbalance();
+      imb[1] = even.imbalance();
+    } catch (const Error& e) {
+      err = e.what();
+    }
+  }
+  err = comm.broadcast(err);
+  if (!err.empty()) throw Error(err);
+  comm.broadcast(std::span<int>(packed));
+  comm.broadcast(std::span<double>(imb, 4));
+  if (verdict) *verdict = {imb[2], imb[3]};
+  std::vector<Int3> lo(static_cast<std::size_t>(P)), hi(lo.size());
+  for (int r = 0; r < P; ++r)
+    for (int d = 0; d < 3; ++d) {
+      lo[static_cast<std::size_t>(r)][d] = packed[static_cast<std::size_t>(6 * r + d)];
+      hi[static_cast<std::size_t>(r)][d] = packed[static_cast<std::size_t>(6 * r + 3 + d)];
+    }
+  return Layouts{Decomposition::fromBoxes(comm, in.grid, std::move(lo), std::move(hi)),
+                 std::nullopt,
+                 "tiled",
+                 model,
+                 imb[0],
+                 imb[1]};
+}
+
 ParticleProbe probeParticles(const Config& cfg, const Decomposition& dec) {
   ParticleProbe out;
   if (cfg.at("particles.sources").empty()) return out;

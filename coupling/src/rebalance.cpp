@@ -4,15 +4,15 @@
 #include <cstdio>
 
 #include "coloc/core/error.hpp"
+#include "coloc/coupling/layouts.hpp"
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {
 
 long long rebalanceInterval(const Config& cfg) {
-  return cfg.string("partition.strategy") == "balanced"
-             ? cfg.integer("partition.rebalance_interval")
-             : 0;
+  const std::string s = cfg.string("partition.strategy");
+  return s == "balanced" || s == "tiled" ? cfg.integer("partition.rebalance_interval") : 0;
 }
 
 bool rebalanceDue(const Config& cfg, long long steps) {
@@ -51,6 +51,15 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
   const auto cost = cellCostsOnRoot(dec, std::span<const double>(p.x[0].data(), m),
                                     std::span<const double>(p.x[1].data(), m),
                                     std::span<const double>(p.x[2].data(), m), plan.model);
+  if (dec.isTiled()) {  // the bisection anew on the same cost, the boxes moved when it pays
+    std::array<double, 2> verdict{1.0, 1.0};
+    Layouts L = tiledLayoutsOnRoot(comm, cfg, cost, plan.model, &dec, &verdict);
+    plan.currentImbalance = verdict[0];
+    plan.newImbalance = L.modelledImbalance;
+    plan.gain = verdict[1];
+    if (plan.gain >= cfg.number("partition.rebalance_threshold")) plan.layouts = std::move(L);
+    return plan;
+  }
   const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
   const auto fixed = cfg.intVec3("partition.dims");
   const Int3 fixedDims{static_cast<int>(fixed[0]), static_cast<int>(fixed[1]),

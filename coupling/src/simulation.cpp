@@ -581,7 +581,9 @@ Layouts Simulation::restartLayouts(const Comm& world, const Config& cfg,
   const std::string strategy = cfg.string("partition.strategy");
   if (info.ranks != world.size() || info.strategy != strategy) return chooseLayouts(world, cfg);
   // The blocks that wrote it: the continuation is then bitwise that of the original run.
-  Layouts L{Decomposition::fromCuts(world, grid, info.fluidCuts),
+  Layouts L{info.fluidBoxLo.empty()
+                ? Decomposition::fromCuts(world, grid, info.fluidCuts)
+                : Decomposition::fromBoxes(world, grid, info.fluidBoxLo, info.fluidBoxHi),
             std::nullopt,
             strategy,
             CostModel{},
@@ -624,7 +626,11 @@ Json Simulation::report(double wallSeconds) const {
   const Comm& comm = dec_.comm();
   Json out = timers_.report(comm, wallSeconds);
   const double wall = comm.max(wallSeconds);
-  out["mpi"] = {{"ranks", comm.size()}, {"dims", {dec_.dims()[0], dec_.dims()[1], dec_.dims()[2]}}};
+  // A tiled layout has no process grid: dims are null and `partition.boxes` lists the boxes.
+  const auto dimsJson = [](const Decomposition& d) {
+    return d.isTiled() ? Json(nullptr) : Json::array({d.dims()[0], d.dims()[1], d.dims()[2]});
+  };
+  out["mpi"] = {{"ranks", comm.size()}, {"dims", dimsJson(dec_)}};
   out["run"] = {
       {"mode", runModeName(mode_)}, {"steps", run_.steps}, {"dem_substeps", run_.substeps},
       {"sim_time", run_.time},      {"wall_s", wall},      {"first_step", runStartSteps_}};
@@ -649,17 +655,23 @@ Json Simulation::report(double wallSeconds) const {
   }
   if (dem_) out["particles"] = dem_->diagnostics();
   if (dem_) out["checks"]["particle_mass_balance"] = out["particles"]["mass_balance"];
-  const auto dimsJson = [](const Decomposition& d) {
-    return Json::array({d.dims()[0], d.dims()[1], d.dims()[2]});
-  };
   out["partition"] = {{"strategy", layouts_.strategy},
                       {"fluid_dims", dimsJson(dec_)},
                       {"particle_dims", dimsJson(particleDecomposition())}};
-  if (layouts_.strategy == "balanced")
-    out["partition"]["balanced"] = {{"cost_per_cell", layouts_.model.perCell},
-                                    {"cost_per_particle", layouts_.model.perParticle},
-                                    {"modelled_imbalance", layouts_.modelledImbalance},
-                                    {"uniform_modelled_imbalance", layouts_.uniformImbalance}};
+  if (dec_.isTiled()) {  // [lo x, y, z, hi x, y, z] a rank, as plan.json writes them
+    std::vector<Int3> lo, hi;
+    dec_.boxes(lo, hi);
+    Json boxes = Json::array();
+    for (std::size_t r = 0; r < lo.size(); ++r)
+      boxes.push_back(Json::array({lo[r][0], lo[r][1], lo[r][2], hi[r][0], hi[r][1], hi[r][2]}));
+    out["partition"]["boxes"] = boxes;
+  }
+  if (layouts_.strategy == "balanced" || layouts_.strategy == "tiled")
+    out["partition"][layouts_.strategy] = {
+        {"cost_per_cell", layouts_.model.perCell},
+        {"cost_per_particle", layouts_.model.perParticle},
+        {"modelled_imbalance", layouts_.modelledImbalance},
+        {"uniform_modelled_imbalance", layouts_.uniformImbalance}};
   if (coupled_)
     out["coupling"] = {{"solid_volume", run_.solidVolume},
                        {"kernel", kernel_ == KernelKind::Centroid ? "centroid" : "trilinear"},

@@ -12,14 +12,15 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
     : dec(d), timers(t), bc(prm.bc) {
   // Setup time is booked by the caller (Timers phases must not nest).
   const auto& grid = dec.grid();
+  // Checked on every rank's block, which every rank knows, so that every rank refuses together
+  // (a check of its own block only would leave the others waiting in hypre).
+  std::vector<Int3> boxLo, boxHi;
+  dec.boxes(boxLo, boxHi);
   for (int a = 0; a < 3; ++a) {
     h[a] = grid.spacing(a);
-    // Checked on every block's cuts, which every rank knows, so that every rank refuses
-    // together (a check of its own block only would leave the others waiting in hypre).
-    const auto& cuts = dec.cuts()[a];
     int smallest = dec.cells()[a];
-    for (std::size_t c = 0; c + 1 < cuts.size(); ++c)
-      smallest = std::min(smallest, cuts[c + 1] - cuts[c]);
+    for (std::size_t r = 0; r < boxLo.size(); ++r)
+      smallest = std::min(smallest, boxHi[r][a] - boxLo[r][a]);
     if (smallest < kGhost)
       throw ConfigError("partition.dims",
                         "the fluid needs blocks of at least " + std::to_string(kGhost) +

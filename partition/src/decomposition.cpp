@@ -223,6 +223,12 @@ Decomposition Decomposition::fromBoxes(const Comm& world, const GlobalGrid& grid
   return dec;
 }
 
+std::string Decomposition::shape() const {
+  if (isTiled()) return std::to_string(size_) + (size_ == 1 ? " box" : " boxes");
+  return std::to_string(dims_[0]) + "x" + std::to_string(dims_[1]) + "x" +
+         std::to_string(dims_[2]) + " blocks";
+}
+
 void Decomposition::requireGrid(const char* what) const {
   if (isTiled())
     throw Error(std::string("Decomposition::") + what +

@@ -11,31 +11,36 @@ void declareDomainConfig(Schema& s) {
   s.boolean("domain.periodic.x", false, "periodic along x");
   s.boolean("domain.periodic.y", false, "periodic along y");
   s.boolean("domain.periodic.z", false, "periodic along z");
-  s.string("partition.strategy", "uniform",
-           "uniform: even Cartesian blocks shared by fluid and particles; balanced: one Cartesian "
-           "grid for both, cuts placed by the cost model partition.cost.*; independent: the "
-           "baseline, the DEM on its own blocks and every fluid-particle transfer by MPI",
-           {"uniform", "balanced", "independent"});
-  s.number("partition.cost.cell", 1.0, "balanced: modelled cost of a cell per step",
+  s.string(
+      "partition.strategy", "uniform",
+      "uniform: even Cartesian blocks shared by fluid and particles; balanced: one Cartesian "
+      "grid for both, cuts placed by the cost model partition.cost.*; independent: the "
+      "baseline, the DEM on its own blocks and every fluid-particle transfer by MPI; tiled: one "
+      "box per rank by recursive bisection of the cost model (no process grid, any rank "
+      "count)",
+      {"uniform", "balanced", "independent", "tiled"});
+  s.number("partition.cost.cell", 1.0, "balanced, tiled: modelled cost of a cell per step",
            Range::nonNegative());
-  s.number("partition.cost.particle", 2.0, "balanced: modelled cost of a particle per step",
+  s.number("partition.cost.particle", 2.0, "balanced, tiled: modelled cost of a particle per step",
            Range::nonNegative());
   s.number("partition.cost.halo_cell", 0.0,
-           "tiled (coloc plan): modelled cost of a halo cell of a box per step (ghost and halo "
+           "tiled: modelled cost of a halo cell of a box per step (ghost and halo "
            "work; the surface term of the bisection)",
            Range::nonNegative());
   s.integer("partition.calibrate_steps", 0,
-            "balanced: measure the two costs over this many steps on uniform blocks first "
+            "balanced, tiled: measure the two costs over this many steps on uniform blocks first "
             "(0: use partition.cost.*)",
             Range::nonNegative());
-  s.integer("partition.rebalance_interval", 0,
-            "balanced: every this many steps, place the cuts anew for the particles as they are "
-            "(weights from the run's own phase timers) and move cells and particles together "
-            "when it pays (0: never)",
-            Range::nonNegative());
-  s.number("partition.rebalance_threshold", 1.05,
-           "balanced: re-balance only when the modelled largest block cost drops by this factor",
-           Range::atLeast(1.0));
+  s.integer(
+      "partition.rebalance_interval", 0,
+      "balanced, tiled: every this many steps, place the cuts anew for the particles as they are "
+      "(weights from the run's own phase timers) and move cells and particles together "
+      "when it pays (0: never)",
+      Range::nonNegative());
+  s.number(
+      "partition.rebalance_threshold", 1.05,
+      "balanced, tiled: re-balance only when the modelled largest block cost drops by this factor",
+      Range::atLeast(1.0));
   s.string("partition.rebalance_weights", "measured",
            "the weights a re-balance places the cuts with: measured (seconds per cell and per "
            "particle from the run's own phase timers) or case (partition.cost.cell and "

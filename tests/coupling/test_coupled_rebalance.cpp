@@ -1,9 +1,9 @@
-// Re-balancing during a run (partition.rebalance_interval): a balanced run that starts on even
-// blocks with its particles in the lower part of the box moves onto new cuts, carrying cells,
-// particles and contact histories together. Checked against a serial run of the same case:
-// every particle's position and velocity equal to 1e-10 relative at the end; across the move,
-// the particle set, the fluid fields (sums over the cells) and every contact history (by pair of
-// global ids) are unchanged; the new blocks lower the modelled imbalance.
+// Re-balancing during a run (partition.rebalance_interval): a balanced (or tiled) run that starts
+// on even blocks with its particles in the lower part of the box moves onto new cuts (boxes),
+// carrying cells, particles and contact histories together. Checked against a serial run of the
+// same case: every particle's position and velocity equal to 1e-10 relative at the end; across the
+// move, the particle set, the fluid fields (sums over the cells) and every contact history (by pair
+// of global ids) are unchanged; the new blocks lower the modelled imbalance.
 #include <unistd.h>
 
 #include <cstdio>
@@ -71,21 +71,38 @@ std::array<double, 4> fieldSums(coupling::Simulation& sim) {
   return s;
 }
 
+/// Every rank's box, to tell whether a move changed the layout.
+std::vector<Int3> boxesOf(const Decomposition& dec) {
+  std::vector<Int3> lo, hi;
+  dec.boxes(lo, hi);
+  lo.insert(lo.end(), hi.begin(), hi.end());
+  return lo;
+}
+
+class Rebalance : public ::testing::TestWithParam<std::string> {};
+
 }  // namespace
 
-TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
+TEST_P(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
   const Comm world = Comm::world();
   const test::SelfComm selfComm;
   {
-    const Config cfg = test::caseFromText(kCase);
+    const std::string strategy = GetParam();
+    const Config cfg = test::caseFromText(kCase, {"partition.strategy=" + strategy});
     const Config serialCfg = test::caseFromText(kCase, {"partition.rebalance_interval=0"});
     const std::string scratch =
         world.broadcast((std::filesystem::temp_directory_path() /
                          ("coloc_rebalance_" + std::to_string(::getpid()) + ".h5"))
                             .string());
     // Start on even blocks although most of the box is empty of particles.
-    coupling::Layouts even{
-        decompositionFromConfig(world, cfg), std::nullopt, "balanced", CostModel{}, 1.0, 1.0};
+    // (tiled: the even blocks as boxes).
+    Decomposition evenBlocks = decompositionFromConfig(world, cfg);
+    if (strategy == "tiled") {
+      std::vector<Int3> lo, hi;
+      evenBlocks.boxes(lo, hi);
+      evenBlocks = Decomposition::fromBoxes(world, evenBlocks.grid(), lo, hi);
+    }
+    coupling::Layouts even{std::move(evenBlocks), std::nullopt, strategy, CostModel{}, 1.0, 1.0};
     auto sim = std::make_unique<coupling::Simulation>(cfg, std::move(even));
     coupling::Simulation ser(selfComm.comm(), serialCfg);
     int moves = 0;
@@ -102,10 +119,11 @@ TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
       const auto fBefore = fieldSums(*sim);
       const long long steps = sim->steps();
       const double time = sim->time();
-      const auto oldCuts = sim->decomposition().cuts();
+      const auto oldBoxes = boxesOf(sim->decomposition());
       sim = coupling::applyRebalance(std::move(sim), cfg, *plan.layouts, scratch);
       ++moves;
-      EXPECT_NE(sim->decomposition().cuts(), oldCuts);
+      EXPECT_NE(boxesOf(sim->decomposition()), oldBoxes);
+      EXPECT_EQ(sim->decomposition().isTiled(), strategy == "tiled");
       EXPECT_EQ(sim->steps(), steps);
       EXPECT_EQ(sim->time(), time);
       EXPECT_EQ(sim->particles()->globalCount(), kCount);
@@ -141,3 +159,5 @@ TEST(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
       ASSERT_NEAR(a[k], b[k], 1e-10 * (k % 6 < 3 ? 0.12 : vmax)) << "particle " << k / 6;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Strategies, Rebalance, ::testing::Values("balanced", "tiled"));

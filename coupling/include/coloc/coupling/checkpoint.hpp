@@ -5,8 +5,9 @@
 //   /                     attributes format "coloc-checkpoint", version, status ("ok" |
 //                         "failed: <message>"), case, mode, ranks, step, time, config (JSON)
 //   /grid                 attributes origin, length, cells, periodic ([3] each)
-//   /partition            strategy, fluid_dims, fluid_cuts_{x,y,z}; particle_dims,
-//                         particle_cuts_{x,y,z} (independent mode)
+//   /partition            strategy; /partition/fluid: dims, cuts_{x,y,z} (a process grid) or
+//                         boxes_lo, boxes_hi ([ranks x 3], tiled); /partition/particles: dims,
+//                         cuts_{x,y,z} (independent mode)
 //   /simulation           the Simulation's counters (time, steps, substeps, last_dt, ...)
 //   /fluid                u_x u_y u_z (faces), p eps eps_old K (cells), KUp [nz][ny][nx][3],
 //                         H_x H_y H_z (AB2 history, faces) + the solver's counters as attributes
@@ -55,6 +56,7 @@ struct CheckpointInfo {
   double time = 0;
   GlobalGrid grid;
   std::array<std::vector<int>, 3> fluidCuts, particleCuts;  // particleCuts: independent mode
+  std::vector<Int3> fluidBoxLo, fluidBoxHi;                 // tiled: every rank's box
   bool ok() const { return status == "ok"; }
 };
 

@@ -39,6 +39,16 @@ StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
                                   const StrategyInput& in, const std::vector<double>& cost,
                                   bool costIsCount);
 
+/// The tiled strategy on rank 0, which alone holds `cost` (one value per global cell): the boxes
+/// of tiledStrategy (surface term partition.cost.halo_cell), sent to every rank (6 ints a rank),
+/// as a tiled Decomposition; modelledImbalance is that of the boxes, uniformImbalance that of
+/// the uniform blocks under the same cost. Collective; an error of the root is raised on every
+/// rank. With `current` (a re-balance), also `verdict` = {the current boxes' imbalance, the
+/// gain: their largest box cost / the new boxes'} under the same cost and surface term.
+Layouts tiledLayoutsOnRoot(const Comm& comm, const Config& cfg, const std::vector<double>& cost,
+                           const CostModel& model, const Decomposition* current = nullptr,
+                           std::array<double, 2>* verdict = nullptr);
+
 /// The case's initial particles as the run creates them, without a solver: the centres that lie
 /// in this rank's block of `dec` (each particle on exactly one rank), and over all of them
 /// (every rank, no communication) their count and radius range.

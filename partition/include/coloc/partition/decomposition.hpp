@@ -20,6 +20,7 @@
 
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "coloc/core/comm.hpp"
@@ -72,6 +73,9 @@ class Decomposition {
   Int3 dims() const;
   Int3 coords() const;
   const std::array<std::vector<int>, 3>& cuts() const;
+
+  /// "2x1x3 blocks" (a process grid) or "7 boxes" (tiled): for progress lines.
+  std::string shape() const;
 
   /// Global cell range [lo, hi) of this block, and its size.
   Int3 lo() const { return lo_; }
