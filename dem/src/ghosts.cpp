@@ -1,6 +1,7 @@
-// dem/src/ghosts.cpp — the face exchanges of the DEM: migration in three sweeps, the ghost plan
-// (build at a rebuild, update between rebuilds). Rows are those of the field table (rows.hpp); the
-// transport is exchange().
+// dem/src/ghosts.cpp — the face exchanges of the DEM on a process grid: migration in three
+// sweeps, the ghost plan (build at a rebuild, update between rebuilds), and the migrant rows both
+// layouts share (tiled layouts: ghosts_tiled.cpp). Rows are those of the field table (rows.hpp);
+// the transport is a CommPlan.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -14,17 +15,6 @@
 namespace coloc::dem {
 
 using namespace detail;
-
-namespace {
-
-/// The ledger entry of one plan operation: its payload, plus the count messages of a build.
-void book(Timers& timers, const PlanTraffic& t, long long countMessages, double seconds,
-          Traffic kind) {
-  const long long msgs = t.messages + countMessages;
-  if (msgs > 0) timers.book(Exchange::IntraPhysics, t.remoteBytes, msgs, seconds, kind);
-}
-
-}  // namespace
 
 int DemSolver::Impl::neighbours(int d, int* out) const {
   int n = 0;
@@ -57,7 +47,82 @@ int faceOffset(const CommPlan& plan, const int* to, int s, int lowRows) {
 
 }  // namespace
 
+int DemSolver::Impl::crossAxis(std::size_t i, int d, std::string& err) {
+  double& x = p.x[d][i];
+  if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i])) {
+    if (err.empty())
+      err = "particle " + std::to_string(p.id[i]) + " has a non-finite " +
+            (!std::isfinite(x)           ? "position"
+             : !std::isfinite(p.v[d][i]) ? "velocity"
+                                         : "angular velocity") +
+            where() + ": the run blew up (time step too large, or a NaN in the forces)";
+    return kLost;
+  }
+  if (bins.periodic[d]) {
+    const double top = bins.origin[d] + bins.L[d];
+    if (x < bins.origin[d]) {
+      x += bins.L[d];
+      if (x >= top) x = bins.origin[d];
+      return -1;
+    }
+    if (x >= top) {
+      x -= bins.L[d];
+      if (x < bins.origin[d]) x = bins.origin[d];
+      return +1;
+    }
+  } else if (x < bins.origin[d] || x > bins.origin[d] + bins.L[d]) {
+    if (err.empty())
+      err = "particle " + std::to_string(p.id[i]) + " left the box through the " +
+            (x < bins.origin[d] ? "low " : "high ") + kAxis[d] + " face" + where() +
+            " (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
+            "): too fast for the walls, or walls are off";
+    return kLost;
+  }
+  const long long b = bins.gbinClamped(x, d);
+  return b < bins.binLo[d] ? -1 : (b >= bins.binHi[d] ? +1 : 0);
+}
+
+std::size_t DemSolver::Impl::migrantLength(std::size_t i, std::size_t W) const {
+  return W + 1 + 4 * static_cast<std::size_t>(hist.hStart[i + 1] - hist.hStart[i]);
+}
+
+void DemSolver::Impl::packMigrant(std::size_t i, std::size_t W, double* out) const {
+  const int h0 = hist.hStart[i], h1 = hist.hStart[i + 1];
+  detail::packRow(p, kOpMigrate, i, nullptr, out);
+  out += W;
+  *out++ = h1 - h0;
+  for (int e = h0; e < h1; ++e) {
+    *out++ = static_cast<double>(hist.hId[static_cast<std::size_t>(e)]);
+    for (int k = 0; k < 3; ++k)
+      *out++ = hist.hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
+  }
+}
+
+void DemSolver::Impl::unpackMigrants(const double* b, std::size_t len, std::size_t W) {
+  std::size_t q = 0;
+  while (q < len) {
+    const std::size_t i = p.nOwned;
+    detail::resizeAll(p, i + 1);
+    p.nOwned = i + 1;
+    detail::unpackRow(p, kOpMigrate, b + q, i, true);
+    const int nh = static_cast<int>(b[q + W]);
+    q += W + 1;
+    ensure(hist.hId, hist.hId.size() + static_cast<std::size_t>(nh));
+    ensure(hist.hS, hist.hS.size() + 3 * static_cast<std::size_t>(nh));
+    ensure(hist.hStart, hist.hStart.size() + 1);
+    for (int e = 0; e < nh; ++e, q += 4) {
+      hist.hId.push_back(static_cast<std::int64_t>(b[q]));
+      hist.hS.insert(hist.hS.end(), b + q + 1, b + q + 4);
+    }
+    hist.hStart.push_back(static_cast<int>(hist.hId.size()));
+  }
+}
+
 void DemSolver::Impl::migrate() {
+  if (ghosts.tiled) {
+    migrateTiled();
+    return;
+  }
   std::string err;
   p.nGhost = 0;
   detail::resizeAll(p, p.nOwned);
@@ -71,40 +136,8 @@ void DemSolver::Impl::migrate() {
     std::size_t w = 0;
     int hw = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      double& x = p.x[d][i];
-      int dir = 0;
-      if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i])) {
-        if (err.empty())
-          err = "particle " + std::to_string(p.id[i]) + " has a non-finite " +
-                (!std::isfinite(x)           ? "position"
-                 : !std::isfinite(p.v[d][i]) ? "velocity"
-                                             : "angular velocity") +
-                where() + ": the run blew up (time step too large, or a NaN in the forces)";
-        dir = 0;
-      } else if (bins.periodic[d]) {
-        const double top = bins.origin[d] + bins.L[d];
-        if (x < bins.origin[d]) {
-          x += bins.L[d];
-          if (x >= top) x = bins.origin[d];
-          dir = -1;
-        } else if (x >= top) {
-          x -= bins.L[d];
-          if (x < bins.origin[d]) x = bins.origin[d];
-          dir = +1;
-        } else {
-          const long long b = bins.gbinClamped(x, d);
-          dir = b < bins.binLo[d] ? -1 : (b >= bins.binHi[d] ? +1 : 0);
-        }
-      } else if (x < bins.origin[d] || x > bins.origin[d] + bins.L[d]) {
-        if (err.empty())
-          err = "particle " + std::to_string(p.id[i]) + " left the box through the " +
-                (x < bins.origin[d] ? "low " : "high ") + kAxis[d] + " face" + where() +
-                " (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
-                "): too fast for the walls, or walls are off";
-      } else {
-        const long long b = bins.gbinClamped(x, d);
-        dir = b < bins.binLo[d] ? -1 : (b >= bins.binHi[d] ? +1 : 0);
-      }
+      int dir = crossAxis(i, d, err);
+      if (dir == kLost) dir = 0;
       const int h0 = hist.hStart[i], h1 = hist.hStart[i + 1];
       if (dir != 0 && dec.neighbor(d, dir) == MPI_PROC_NULL) dir = 0;  // cannot happen
       if (dir == 0) {
@@ -113,14 +146,8 @@ void DemSolver::Impl::migrate() {
       } else {
         auto& b = ghosts.sbuf[dir > 0 ? 1 : 0];
         const std::size_t o = b.size();
-        b.resize(o + W);
-        detail::packRow(p, kOpMigrate, i, nullptr, b.data() + o);
-        b.push_back(h1 - h0);
-        for (int e = h0; e < h1; ++e) {
-          b.push_back(static_cast<double>(hist.hId[static_cast<std::size_t>(e)]));
-          for (int k = 0; k < 3; ++k)
-            b.push_back(hist.hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)]);
-        }
+        b.resize(o + migrantLength(i, W));
+        packMigrant(i, W, b.data() + o);
       }
     }
     p.nOwned = w;
@@ -149,27 +176,9 @@ void DemSolver::Impl::migrate() {
     book(timers, t, nn - (nb[0] == dec.rank() ? 1 : 0), comm.wtime() - t0, Traffic::DemMigrate);
     std::array<GhostPlan::Segment, 2> seg;
     const int ns = importSegments(ghosts.mig, d, seg, 0);
-    for (int g = 0; g < ns; ++g) {
-      const double* b = ghosts.rbuf.data() + seg[static_cast<std::size_t>(g)].from;
-      const auto len = static_cast<std::size_t>(seg[static_cast<std::size_t>(g)].count);
-      std::size_t q = 0;
-      while (q < len) {
-        const std::size_t i = p.nOwned;
-        detail::resizeAll(p, i + 1);
-        p.nOwned = i + 1;
-        detail::unpackRow(p, kOpMigrate, b + q, i, true);
-        const int nh = static_cast<int>(b[q + W]);
-        q += W + 1;
-        ensure(hist.hId, hist.hId.size() + static_cast<std::size_t>(nh));
-        ensure(hist.hS, hist.hS.size() + 3 * static_cast<std::size_t>(nh));
-        ensure(hist.hStart, hist.hStart.size() + 1);
-        for (int e = 0; e < nh; ++e, q += 4) {
-          hist.hId.push_back(static_cast<std::int64_t>(b[q]));
-          hist.hS.insert(hist.hS.end(), b + q + 1, b + q + 4);
-        }
-        hist.hStart.push_back(static_cast<int>(hist.hId.size()));
-      }
-    }
+    for (int g = 0; g < ns; ++g)
+      unpackMigrants(ghosts.rbuf.data() + seg[static_cast<std::size_t>(g)].from,
+                     static_cast<std::size_t>(seg[static_cast<std::size_t>(g)].count), W);
   }
   comm.raiseIfAny(err);
 }
@@ -194,6 +203,10 @@ PlanTraffic DemSolver::Impl::forwardGhostRows(int d, unsigned op, std::size_t W)
 }
 
 void DemSolver::Impl::buildGhosts() {
+  if (ghosts.tiled) {
+    buildGhostsTiled();
+    return;
+  }
   const Int3 coords = dec.coords(), dims = dec.dims();
   const std::size_t W = detail::rowWidth(p, kOpGhostBuild);
   for (int d = 0; d < 3; ++d) {
@@ -245,6 +258,10 @@ void DemSolver::Impl::buildGhosts() {
 }
 
 void DemSolver::Impl::updateGhosts() {
+  if (ghosts.tiled) {
+    updateGhostsTiled();
+    return;
+  }
   const std::size_t W = detail::rowWidth(p, kOpGhostUpdate);
   for (int d = 0; d < 3; ++d) {
     if (ghosts.nSeg[static_cast<std::size_t>(d)] == 0) continue;

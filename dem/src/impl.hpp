@@ -7,6 +7,7 @@
 //   flow.cpp       face conditions, outflow removal, inflow insertion, DemFlow
 //   history.cpp    contact-history pool: packing into rows per particle, compaction
 //   ghosts.cpp     face exchanges: migration, ghost build and update (rows of the field table)
+//   ghosts_tiled.cpp  the same on a tiled layout (general boxes), one exchange each
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
 //   neighbors.cpp  the half Verlet list build (and the history lookup of its entries)
 //   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
@@ -150,6 +151,23 @@ struct DemSolver::Impl {
   void buildGhosts();
   void updateGhosts();
   PlanTraffic forwardGhostRows(int d, unsigned op, std::size_t W);
+  /// Migration along axis d of owned particle i: wraps its position across a periodic face,
+  /// returns -1 / +1 when it leaves the block through the low / high face along d, else 0;
+  /// kLost (and the first such message in err) for a non-finite particle or one beyond a wall.
+  static constexpr int kLost = 2;
+  int crossAxis(std::size_t i, int d, std::string& err);
+  /// A migrant's row: the field table's kOpMigrate row (W doubles), its history count, then
+  /// (partner id, shear 3) per history.
+  std::size_t migrantLength(std::size_t i, std::size_t W) const;
+  void packMigrant(std::size_t i, std::size_t W, double* out) const;
+  /// Migrant rows laid end to end (len doubles) appended as owned particles.
+  void unpackMigrants(const double* b, std::size_t len, std::size_t W);
+  // ghosts_tiled.cpp: the same operations on a tiled layout (chosen once, at setup)
+  void setupTargets(const BinLayout& b);
+  void migrateTiled();
+  void buildGhostsTiled();
+  void updateGhostsTiled();
+  PlanTraffic forwardTargetRows(unsigned op, std::size_t W);
   // bins.cpp, neighbors.cpp
   void sortByBin();
   void buildLists();

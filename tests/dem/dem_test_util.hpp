@@ -1,10 +1,12 @@
 // Helpers of the DEM tests: a case from JSON text, a solver on it, global sums.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "coloc/core/run_config.hpp"
@@ -39,6 +41,10 @@ struct Case {
   Case(const std::string& text, const coloc::Comm& comm, coloc::Int3 dims)
       : cfg(config(text)),
         dec(coloc::Decomposition::uniform(comm, coloc::gridFromConfig(cfg), dims)) {
+    dem = std::make_unique<coloc::dem::DemSolver>(dec, cfg, timers);
+  }
+  /// Same case on a given decomposition (a tiled layout: Decomposition::fromBoxes).
+  Case(const std::string& text, coloc::Decomposition d) : cfg(config(text)), dec(std::move(d)) {
     dem = std::make_unique<coloc::dem::DemSolver>(dec, cfg, timers);
   }
   coloc::dem::ParticleStore& p() { return dem->particles(); }
@@ -80,6 +86,51 @@ inline std::vector<double> table(Case& r, long n) {
       t[k + 4 + d] = s.v[d][i];
       t[k + 7 + d] = s.omega[d][i];
     }
+  }
+  r.dec.comm().sumInPlace(std::span<double>(t));
+  return t;
+}
+
+/// Largest difference between two tables of table(): positions relative to `length`, velocities
+/// and angular velocities relative to their largest magnitude in `ref`; and the ids whose count
+/// differs (missing or duplicated).
+struct TableDiff {
+  double x = 0, v = 0, omega = 0;
+  long countsDiffer = 0;
+};
+inline TableDiff compare(const std::vector<double>& t, const std::vector<double>& ref,
+                         double length) {
+  TableDiff out;
+  double vmax = 0, wmax = 0;
+  for (std::size_t k = 0; k < ref.size(); k += 10)
+    for (std::size_t d = 0; d < 3; ++d) {
+      vmax = std::max(vmax, std::fabs(ref[k + 4 + d]));
+      wmax = std::max(wmax, std::fabs(ref[k + 7 + d]));
+    }
+  for (std::size_t k = 0; k < ref.size(); k += 10) {
+    if (t[k] != ref[k]) ++out.countsDiffer;
+    for (std::size_t d = 0; d < 3; ++d) {
+      out.x = std::max(out.x, std::fabs(t[k + 1 + d] - ref[k + 1 + d]) / length);
+      if (vmax > 0) out.v = std::max(out.v, std::fabs(t[k + 4 + d] - ref[k + 4 + d]) / vmax);
+      if (wmax > 0)
+        out.omega = std::max(out.omega, std::fabs(t[k + 7 + d] - ref[k + 7 + d]) / wmax);
+    }
+  }
+  return out;
+}
+
+/// Contact histories of saveState() (which rebuilds first) over all ranks, keyed by (holder id,
+/// partner id; walls -1..-6 as partners n..n+5): [count, shear 3] per key. Collective.
+inline std::vector<double> historyTable(Case& r, long n) {
+  const auto st = r.dem->saveState();
+  const auto cols = static_cast<std::size_t>(n + 6);
+  std::vector<double> t(4 * static_cast<std::size_t>(n) * cols, 0.0);
+  for (const auto& c : st.contacts) {
+    if (c.holder < 0 || c.holder >= n || c.partner >= n) continue;
+    const auto col = static_cast<std::size_t>(c.partner >= 0 ? c.partner : n - 1 - c.partner);
+    const std::size_t k = 4 * (static_cast<std::size_t>(c.holder) * cols + col);
+    t[k] += 1;
+    for (std::size_t d = 0; d < 3; ++d) t[k + 1 + d] = c.shear[d];
   }
   r.dec.comm().sumInPlace(std::span<double>(t));
   return t;
