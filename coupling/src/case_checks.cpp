@@ -167,6 +167,14 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
 
 Int3 largestUniformBlock(const Config& cfg, int ranks) {
   const GlobalGrid g = gridFromConfig(cfg);
+  if (cfg.string("partition.strategy") == "tiled") {
+    // No process grid: the boxes have about cells / ranks cells; estimated as cubes of that
+    // many cells (the bisection cuts the longest axis first), at least one cell thick.
+    const double side = std::cbrt(static_cast<double>(g.cellCount()) / std::max(ranks, 1));
+    Int3 b{};
+    for (int a = 0; a < 3; ++a) b[a] = std::clamp(static_cast<int>(std::ceil(side)), 1, g.cells[a]);
+    return b;
+  }
   const Int3 dims = processGridFromConfig(cfg, ranks);  // the run's own grid (and its errors)
   Int3 b{};
   for (int a = 0; a < 3; ++a) b[a] = (g.cells[a] + std::max(dims[a], 1) - 1) / std::max(dims[a], 1);

@@ -14,8 +14,9 @@ namespace coloc::coupling {
 
 namespace {
 
-/// Cost weights measured on the uniform blocks: busy seconds of the fluid phases per cell-step
-/// and of the particle and coupling phases per particle-step (summed over ranks).
+/// Cost weights measured on the uniform blocks (tiled: boxes of equal cells): busy seconds of the
+/// fluid phases per cell-step and of the particle and coupling phases per particle-step (summed
+/// over ranks).
 CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long steps) {
   Layouts probe{uniform, std::nullopt, "uniform", CostModel{}, 1.0, 1.0};
   Simulation sim(cfg, probe);
@@ -39,6 +40,22 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
   return m;
 }
 
+/// The tiled strategy, for any rank count (no process grid is needed on the way): boxes of
+/// equal cell counts first, the layout of a fluid-only run and where the calibration runs and
+/// the cost probe counts the particles; then the boxes of the modelled cost.
+Layouts chooseTiled(const Comm& world, const Config& cfg) {
+  const GlobalGrid grid = gridFromConfig(cfg);
+  std::vector<double> cells;
+  if (world.isRoot()) cells.assign(static_cast<std::size_t>(grid.cellCount()), 1.0);
+  Layouts equal = tiledLayoutsOnRoot(world, cfg, cells, CostModel{1.0, 0.0});
+  if (runMode(cfg) == RunMode::FluidOnly) return equal;
+  CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
+  if (cfg.integer("partition.calibrate_steps") > 0)
+    model = calibrate(cfg, equal.fluid, cfg.integer("partition.calibrate_steps"));
+  const std::vector<double> cost = probeCellCostsOnRoot(cfg, equal.fluid, model);
+  return tiledLayoutsOnRoot(world, cfg, cost, model);
+}
+
 }  // namespace
 
 Layouts chooseLayouts(const Comm& world, const Config& cfg) {
@@ -49,13 +66,8 @@ Layouts chooseLayouts(const Comm& world, const Config& cfg) {
                       "re-balancing moves the cuts of the balanced or tiled strategies: set "
                       "partition.strategy to balanced or tiled (it is '" +
                           strategy + "')");
+  if (strategy == "tiled") return chooseTiled(world, cfg);
   const Decomposition uniform = decompositionFromConfig(world, cfg);
-  if (strategy == "tiled" && runMode(cfg) == RunMode::FluidOnly) {
-    // No particles: boxes of equal cell counts, for any rank count.
-    std::vector<double> cells;
-    if (world.isRoot()) cells.assign(static_cast<std::size_t>(uniform.grid().cellCount()), 1.0);
-    return tiledLayoutsOnRoot(world, cfg, cells, CostModel{1.0, 0.0});
-  }
   Layouts L{uniform, std::nullopt, strategy, CostModel{}, 1.0, 1.0};
   if (strategy == "uniform" || runMode(cfg) == RunMode::FluidOnly) return L;
   const bool independent = strategy == "independent";
@@ -68,7 +80,6 @@ Layouts chooseLayouts(const Comm& world, const Config& cfg) {
   // independent: the DEM's blocks are balanced by particle count.
   const std::vector<double> cost =
       probeCellCostsOnRoot(cfg, uniform, independent ? CostModel{0.0, 1.0} : model);
-  if (strategy == "tiled") return tiledLayoutsOnRoot(world, cfg, cost, model);
   const StrategyInput in = strategyInput(cfg, world.size());
   const StrategyBlocks b = chooseBlocksOnRoot(world, strategy, in, cost, independent);
   if (independent) {

@@ -1,6 +1,7 @@
 #include "coloc/coupling/layouts.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <span>
 
 #include "coloc/core/error.hpp"
@@ -87,10 +88,7 @@ Layouts tiledLayoutsOnRoot(const Comm& comm, const Config& cfg, const std::vecto
       const TiledLayout t = tiledStrategy(in, cost, surface);
       if (current) {
         TiledLayout now;
-        now.layout.grid = in.grid;
-        std::vector<Int3> lo, hi;
-        current->boxes(lo, hi);
-        for (std::size_t r = 0; r < lo.size(); ++r) now.layout.box.push_back({lo[r], hi[r]});
+        now.layout = boxLayoutOf(*current);
         TiledOptions opt;
         opt.surfaceCost = surface;
         evaluateBoxes(cost, opt, now);
@@ -104,13 +102,17 @@ Layouts tiledLayoutsOnRoot(const Comm& comm, const Config& cfg, const std::vecto
           packed[static_cast<std::size_t>(6 * r + 3 + d)] =
               t.layout.box[static_cast<std::size_t>(r)].hi[d];
         }
-      BalancedLayout even;
-      const Blocks u = uniformBlocks(in);
-      even.dims = u.dims;
-      even.cuts = u.cuts;
-      evaluateLayout(in.grid, cost, even);
       imb[0] = t.imbalance();
-      imb[1] = even.imbalance();
+      imb[1] = std::numeric_limits<double>::quiet_NaN();  // no process grid: null in reports
+      try {
+        BalancedLayout even;
+        const Blocks u = uniformBlocks(in);
+        even.dims = u.dims;
+        even.cuts = u.cuts;
+        evaluateLayout(in.grid, cost, even);
+        imb[1] = even.imbalance();
+      } catch (const ConfigError&) {
+      }
     } catch (const Error& e) {
       err = e.what();
     }

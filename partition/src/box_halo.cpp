@@ -132,7 +132,13 @@ long long haloRemoteCells(const BoxLayout& l, int r, int ghost, Int3 stagger) {
 }
 
 BoxHaloPlan::BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout& layout)
-    : layout_(layout) {
+    : BoxHaloPlan(comm, l, layout, layout) {}
+
+BoxHaloPlan::BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout& layout,
+                         const FieldLayout& storage)
+    : layout_(layout), storage_(storage) {
+  if (storage.n != layout.n || storage.stagger != layout.stagger || storage.ghost < layout.ghost)
+    throw Error("BoxHaloPlan: the storage layout must hold the plan's layout");
   const int me = comm.rank(), size = comm.size();
   if (l.size() != size) throw Error("BoxHaloPlan: one box per rank expected");
   const IndexBox& mine = l.box[static_cast<std::size_t>(me)];
@@ -150,7 +156,7 @@ BoxHaloPlan::BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout
                                                   ", thinner than the " + std::to_string(gw) +
                                                   " ghost layers");
   }
-  const Offsets at(layout);
+  const Offsets at(storage);
   std::vector<int> sendCount(static_cast<std::size_t>(size), 0),
       recvCount(static_cast<std::size_t>(size), 0);
 
@@ -203,8 +209,15 @@ BoxHaloPlan::BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout
   plan_ = CommPlan::fromCounts(comm, sendCount, recvCount);
 }
 
+void BoxHaloPlan::requireStorage(std::span<Field3<double>* const> fields) const {
+  for (const auto* f : fields)
+    if (!(f->layout() == storage_))
+      throw Error("BoxHaloPlan: a field's layout is not the one the plan was built for");
+}
+
 void BoxHaloPlan::gather(std::span<Field3<double>* const> fields, Timers* timers, Exchange kind,
                          Traffic traffic) {
+  requireStorage(fields);
   const double t0 = MPI_Wtime();
   const int w = static_cast<int>(fields.size());
   const auto uw = static_cast<std::size_t>(w);
@@ -223,6 +236,7 @@ void BoxHaloPlan::gather(std::span<Field3<double>* const> fields, Timers* timers
 
 void BoxHaloPlan::scatterSum(std::span<Field3<double>* const> fields, Fold fold, Timers* timers,
                              Exchange kind, Traffic traffic) {
+  requireStorage(fields);
   const double t0 = MPI_Wtime();
   const int w = static_cast<int>(fields.size());
   const auto uw = static_cast<std::size_t>(w);

@@ -44,11 +44,8 @@ void unpack(std::span<Field3<double>* const> fields, const IndexBox& b, const do
 HaloPlan::HaloPlan(const Decomposition& dec, const FieldLayout& layout)
     : dec_(&dec), layout_(layout), me_(dec.rank()) {
   if (dec.isTiled()) {
-    BoxLayout l{dec.grid(), {}};
-    std::vector<Int3> lo, hi;
-    dec.boxes(lo, hi);
-    for (std::size_t r = 0; r < lo.size(); ++r) l.box.push_back({lo[r], hi[r]});
-    box_ = std::make_shared<BoxHaloPlan>(dec.comm(), l, layout);
+    // refuses thin boxes now
+    box_ = std::make_shared<BoxHaloPlan>(dec.comm(), boxLayoutOf(dec), layout);
     return;
   }
   const int g = layout.ghost;
@@ -90,6 +87,13 @@ void HaloPlan::ensureBuffers(std::size_t nFields) {
       recvBuf_[d][s].assign(static_cast<std::size_t>(v) * nFields, 0.0);
     }
   buffersFor_ = nFields;
+}
+
+BoxHaloPlan& HaloPlan::boxPlanFor(std::span<Field3<double>* const> fields) {
+  if (fields.empty() || fields[0]->layout() == box_->storage()) return *box_;
+  box_ =
+      std::make_shared<BoxHaloPlan>(dec_->comm(), boxLayoutOf(*dec_), layout_, fields[0]->layout());
+  return *box_;
 }
 
 long long HaloPlan::bytesPerGather() const {
@@ -200,14 +204,14 @@ void HaloPlan::fold(int d, std::span<Field3<double>* const> fields) {
 
 void HaloPlan::gather(std::span<Field3<double>* const> fields, Timers* timers, Exchange kind,
                       Traffic traffic) {
-  if (box_) return box_->gather(fields, timers, kind, traffic);
+  if (box_) return boxPlanFor(fields).gather(fields, timers, kind, traffic);
   ensureBuffers(fields.size());
   for (int d = 0; d < 3; ++d) sweep(d, fields, /*reverse=*/false, timers, kind, traffic);
 }
 
 void HaloPlan::scatterSum(std::span<Field3<double>* const> fields, Fold f, Timers* timers,
                           Exchange kind, Traffic traffic) {
-  if (box_) return box_->scatterSum(fields, f, timers, kind, traffic);
+  if (box_) return boxPlanFor(fields).scatterSum(fields, f, timers, kind, traffic);
   ensureBuffers(fields.size());
   for (int d = 2; d >= 0; --d) {
     sweep(d, fields, /*reverse=*/true, timers, kind, traffic);

@@ -9,6 +9,14 @@
 #include "prefix_sum.hpp"
 
 namespace coloc {
+
+BoxLayout boxLayoutOf(const Decomposition& dec) {
+  BoxLayout l{dec.grid(), {}};
+  std::vector<Int3> lo, hi;
+  dec.boxes(lo, hi);
+  for (std::size_t r = 0; r < lo.size(); ++r) l.box.push_back({lo[r], hi[r]});
+  return l;
+}
 namespace {
 
 using detail::PrefixSum;

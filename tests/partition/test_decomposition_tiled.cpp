@@ -139,6 +139,34 @@ TEST_P(TiledDecomposition, HaloPlanForwardsToTheBoxPlan) {
   }
 }
 
+TEST_P(TiledDecomposition, OneLayerPlanOnTwoLayerFieldsAsOnTheProcessGrid) {
+  // The coupling moves one ghost layer of the fluid's two-layer fields: the tiled plan must
+  // address the fields' own storage (and leave the second layer alone), as the grid's plan does.
+  Comm world(MPI_COMM_WORLD);
+  const GlobalGrid g = grid(GetParam());
+  const Decomposition cart = Decomposition::uniform(world, g);
+  std::vector<Int3> lo, hi;
+  cart.boxes(lo, hi);
+  const Decomposition boxes = Decomposition::fromBoxes(world, g, lo, hi);
+  FieldLayout one, two;
+  one.n = two.n = cart.cells();
+  one.ghost = 1;
+  two.ghost = 2;
+  HaloPlan viaGrid(cart, one), viaBoxes(boxes, one);
+  Field3<double> a(two, 0.0), b(two, 0.0);
+  forEach(two.allocated(), [&](int i, int j, int k) {
+    const double v = 1.0 + i + 16.0 * j + 256.0 * k + 4096.0 * world.rank();
+    a(i, j, k) = v;
+    b(i, j, k) = v;
+  });
+  viaGrid.gather(a);
+  viaBoxes.gather(b);
+  forEach(two.allocated(), [&](int i, int j, int k) { ASSERT_EQ(a(i, j, k), b(i, j, k)); });
+  viaGrid.scatterSum(a, Fold::Mirror);
+  viaBoxes.scatterSum(b, Fold::Mirror);
+  forEach(two.allocated(), [&](int i, int j, int k) { ASSERT_EQ(a(i, j, k), b(i, j, k)); });
+}
+
 INSTANTIATE_TEST_SUITE_P(Periodicity, TiledDecomposition,
                          ::testing::Values(std::array<bool, 3>{false, false, false},
                                            std::array<bool, 3>{true, false, false},

@@ -64,11 +64,17 @@ class BoxHaloPlan {
  public:
   BoxHaloPlan() = default;
   /// Rank comm.rank() owns l.box[comm.rank()]; `layout` is its field layout (n must be the box's
-  /// size). Throws ConfigError when a box is thinner than the ghost width along an axis where it
-  /// has neighbours. No communication.
+  /// size): its ghost width and staggering say which ghosts move. `storage` is the layout of the
+  /// fields the plan is applied to (the same by default; it may keep more ghost layers than move,
+  /// as the coupling's one-layer plan on the fluid's two-layer fields). Throws ConfigError when a
+  /// box is thinner than the ghost width along an axis where it has neighbours. No
+  /// communication.
   BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout& layout);
+  BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout& layout,
+              const FieldLayout& storage);
 
   const FieldLayout& layout() const { return layout_; }
+  const FieldLayout& storage() const { return storage_; }
   const std::vector<int>& neighbours() const { return neighbours_; }
 
   void gather(std::span<Field3<double>* const> fields, Timers* timers = nullptr,
@@ -89,7 +95,8 @@ class BoxHaloPlan {
   long long bytesPerGather() const { return bytesPerGather_; }
 
  private:
-  FieldLayout layout_;
+  void requireStorage(std::span<Field3<double>* const> fields) const;
+  FieldLayout layout_, storage_;
   CommPlan plan_;
   std::vector<int> neighbours_;
   // Storage offsets (Field3::index) of this layout, in plan order:

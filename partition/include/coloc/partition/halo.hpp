@@ -12,7 +12,9 @@
 // Buffers are allocated on first use for the largest field count seen and never again.
 // Every message is booked in the Timers ledger under the exchange kind the caller names.
 // On a tiled decomposition the plan holds a BoxHaloPlan (partition/box_halo.hpp) and forwards
-// both operations to it: one message per box neighbour, same results (sums to rounding).
+// both operations to it: one message per box neighbour, same results (sums to rounding). The box
+// plan's index tables are made for the storage layout of the fields it is applied to (which may
+// keep more ghost layers than the plan moves): built again only when that layout changes.
 #pragma once
 
 #include <memory>
@@ -67,6 +69,7 @@ class HaloPlan {
              Exchange kind, Traffic traffic);
   void fold(int d, std::span<Field3<double>* const> fields);
   void ensureBuffers(std::size_t nFields);
+  BoxHaloPlan& boxPlanFor(std::span<Field3<double>* const> fields);
 
   std::shared_ptr<BoxHaloPlan> box_;  // tiled layouts: the general box plan does the work
   const Decomposition* dec_ = nullptr;

@@ -46,6 +46,9 @@ struct BoxLayout {
   std::array<std::vector<int>, 3> cutPlanes() const;
 };
 
+/// The boxes of a decomposition (a process grid's blocks, or a tiled layout's boxes).
+BoxLayout boxLayoutOf(const Decomposition& dec);
+
 struct TiledOptions {
   int minCells = 2;        // thinnest box along an axis (an axis thinner than this stays whole)
   int granularity = 1;     // box bounds on multiples of this many cells (or on N)
