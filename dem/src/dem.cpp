@@ -71,7 +71,7 @@ void DemSolver::Impl::substep() {
   }
   {
     ScopedPhase t(timers, Phase::DemForce);
-    computeForces(true);
+    computeForces(true, true);
   }
   {
     ScopedPhase t(timers, Phase::DemIntegrate);
@@ -81,41 +81,61 @@ void DemSolver::Impl::substep() {
   time = static_cast<double>(steps) * dt;
 }
 
+// While no rebuild has reordered the particles since the last force computation (`packed`),
+// initialIntegrate also does the first part of the next force computation, on the data it has
+// in hand: it writes the owned particles' packed rows for the force loop (pairs.hpp: Body) and,
+// after its half kick, resets the force and torque sums to gravity + fExt (the same values as
+// the force loop's own reset: same bits). By blocks of kIntBlock particles: the columns on the
+// vector units, then the packed rows copied whole (line stores) while the block is in L1.
+namespace {
+constexpr std::size_t kIntBlock = 256;
+}
+
 void DemSolver::Impl::initialIntegrate() {
   const std::size_t n = p.nOwned;
   const double h = 0.5 * dt;
-  for (int d = 0; d < 3; ++d) {
-    double* x = p.x[d].data();
-    double* v = p.v[d].data();
-    const double* f = p.f[d].data();
-    const double* m = p.mass.data();
+  double *X0 = p.x[0].data(), *X1 = p.x[1].data(), *X2 = p.x[2].data();
+  double *V0 = p.v[0].data(), *V1 = p.v[1].data(), *V2 = p.v[2].data();
+  double *W0 = p.omega[0].data(), *W1 = p.omega[1].data(), *W2 = p.omega[2].data();
+  double *F0 = p.f[0].data(), *F1 = p.f[1].data(), *F2 = p.f[2].data();
+  double *T0 = p.torque[0].data(), *T1 = p.torque[1].data(), *T2 = p.torque[2].data();
+  const double *m = p.mass.data(), *r = p.radius.data();
+  const double *E0 = p.fExt[0].data(), *E1 = p.fExt[1].data(), *E2 = p.fExt[2].data();
+  const double g0 = g[0], g1 = g[1], g2 = g[2];
+  Body* B = body.data();
+  const bool reset = packed;
+  for (std::size_t b0 = 0; b0 < n; b0 += kIntBlock) {
+    const std::size_t b1 = std::min(n, b0 + kIntBlock);
 #pragma omp simd
-    for (std::size_t i = 0; i < n; ++i) {
-      v[i] += h * f[i] / m[i];
-      x[i] += dt * v[i];
+    for (std::size_t i = b0; i < b1; ++i) {
+      V0[i] += h * F0[i] / m[i], V1[i] += h * F1[i] / m[i], V2[i] += h * F2[i] / m[i];
+      X0[i] += dt * V0[i], X1[i] += dt * V1[i], X2[i] += dt * V2[i];
+      const double I = 0.4 * m[i] * r[i] * r[i];
+      W0[i] += h * T0[i] / I, W1[i] += h * T1[i] / I, W2[i] += h * T2[i] / I;
+      if (reset) {
+        F0[i] = m[i] * g0 + E0[i], F1[i] = m[i] * g1 + E1[i], F2[i] = m[i] * g2 + E2[i];
+        T0[i] = T1[i] = T2[i] = 0;
+      }
     }
-    double* w = p.omega[d].data();
-    const double* t = p.torque[d].data();
-    const double* r = p.radius.data();
-#pragma omp simd
-    for (std::size_t i = 0; i < n; ++i) w[i] += h * t[i] / (0.4 * m[i] * r[i] * r[i]);
+    if (!packed) continue;
+    for (std::size_t i = b0; i < b1; ++i)
+      B[i] = Body{{X0[i], X1[i], X2[i]}, r[i], {V0[i], V1[i], V2[i]}, m[i]};
   }
 }
 
 void DemSolver::Impl::finalIntegrate() {
   const std::size_t n = p.nOwned;
   const double h = 0.5 * dt;
-  for (int d = 0; d < 3; ++d) {
-    double* v = p.v[d].data();
-    const double* f = p.f[d].data();
-    const double* m = p.mass.data();
+  double *V0 = p.v[0].data(), *V1 = p.v[1].data(), *V2 = p.v[2].data();
+  double *W0 = p.omega[0].data(), *W1 = p.omega[1].data(), *W2 = p.omega[2].data();
+  const double *F0 = p.f[0].data(), *F1 = p.f[1].data(), *F2 = p.f[2].data();
+  const double *T0 = p.torque[0].data(), *T1 = p.torque[1].data(), *T2 = p.torque[2].data();
+  const double *m = p.mass.data(), *r = p.radius.data();
 #pragma omp simd
-    for (std::size_t i = 0; i < n; ++i) v[i] += h * f[i] / m[i];
-    double* w = p.omega[d].data();
-    const double* t = p.torque[d].data();
-    const double* r = p.radius.data();
-#pragma omp simd
-    for (std::size_t i = 0; i < n; ++i) w[i] += h * t[i] / (0.4 * m[i] * r[i] * r[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    V0[i] += h * F0[i] / m[i], V1[i] += h * F1[i] / m[i], V2[i] += h * F2[i] / m[i];
+    const double I = 0.4 * m[i] * r[i] * r[i];
+    W0[i] += h * T0[i] / I, W1[i] += h * T1[i] / I, W2[i] += h * T2[i] / I;
   }
 }
 
@@ -172,6 +192,7 @@ bool DemSolver::Impl::decideRebuild() {
 // rebuild: history, migration, sort, ghosts, lists
 
 void DemSolver::Impl::rebuild(bool first) {
+  packed = false;  // the particles change order (and count): the next force loop packs them
   {
     ScopedPhase t(timers, Phase::DemMigrate);
     if (!first) packHistory();
@@ -200,7 +221,7 @@ void DemSolver::Impl::rebuild(bool first) {
 
 std::size_t DemSolver::Impl::memory() const {
   return columnBytes(p) + bins.bytes() + list.bytes() + hist.bytes() + ghosts.bytes() + cap(perm) +
-         cap(iscr);
+         cap(iscr) + cap(body);
 }
 
 // ---------------------------------------------------------------------------------------------

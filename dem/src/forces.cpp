@@ -17,12 +17,13 @@ using namespace detail;
 // ---------------------------------------------------------------------------------------------
 // forces
 
-void DemSolver::Impl::computeForces(bool update) {
+void DemSolver::Impl::computeForces(bool update, bool stepped) {
   if (model == Model::HertzMindlin)
-    rolling ? forces<Model::HertzMindlin, true>(update)
-            : forces<Model::HertzMindlin, false>(update);
+    rolling ? forces<Model::HertzMindlin, true>(update, stepped)
+            : forces<Model::HertzMindlin, false>(update, stepped);
   else
-    rolling ? forces<Model::Linear, true>(update) : forces<Model::Linear, false>(update);
+    rolling ? forces<Model::Linear, true>(update, stepped)
+            : forces<Model::Linear, false>(update, stepped);
 }
 
 // Each pair is computed once (Newton's third law inside the rank; an owned-ghost pair is
@@ -34,31 +35,45 @@ void DemSolver::Impl::computeForces(bool update) {
 // entries go through a PairChunk (pairs.hpp): gathered in list order, their contact law computed
 // on the vector units, the results added in list order (the order above).
 template <Model M, bool Rolling>
-void DemSolver::Impl::forces(bool update) {
+void DemSolver::Impl::forces(bool update, bool stepped) {
   const std::size_t n = p.nOwned, nAll = p.size();
   double* FX[3] = {p.f[0].data(), p.f[1].data(), p.f[2].data()};
   double* TX[3] = {p.torque[0].data(), p.torque[1].data(), p.torque[2].data()};
-  for (int k = 0; k < 3; ++k) {
-    const double* fe = p.fExt[k].data();
-    const double* ms = p.mass.data();
-    double* fk = FX[k];
-    double* tk = TX[k];
-    const double gk = g[k];
+  // inside a step without a rebuild, initialIntegrate has reset the sums and packed the owned
+  // bodies; else both here. The ghosts' bodies are packed here.
+  const bool ownedCurrent = stepped && packed;
+  if (!ownedCurrent) {
+    for (int k = 0; k < 3; ++k) {
+      const double* fe = p.fExt[k].data();
+      const double* ms = p.mass.data();
+      double* fk = FX[k];
+      double* tk = TX[k];
+      const double gk = g[k];
 #pragma omp simd
-    for (std::size_t i = 0; i < n; ++i) {
-      fk[i] = ms[i] * gk + fe[i];
-      tk[i] = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        fk[i] = ms[i] * gk + fe[i];
+        tk[i] = 0;
+      }
     }
+    ensure(body, nAll);
+    body.resize(nAll);
   }
-  const double* X[3] = {p.x[0].data(), p.x[1].data(), p.x[2].data()};
-  const double* R = p.radius.data();
+  {
+    const double *X0 = p.x[0].data(), *X1 = p.x[1].data(), *X2 = p.x[2].data();
+    const double *V0 = p.v[0].data(), *V1 = p.v[1].data(), *V2 = p.v[2].data();
+    const double *R = p.radius.data(), *Ms = p.mass.data();
+    Body* Bw = body.data();
+    for (std::size_t i = ownedCurrent ? n : 0; i < nAll; ++i)
+      Bw[i] = Body{{X0[i], X1[i], X2[i]}, R[i], {V0[i], V1[i], V2[i]}, Ms[i]};
+  }
+  packed = true;
+  const Body* B = body.data();
   const int* mat = p.material.data();
   const int* nbrs = list.nbr.data();
   int* sl = list.slot.data();
-  PairInputs in{{p.v[0].data(), p.v[1].data(), p.v[2].data()},
+  const bool single = nMat == 1;
+  PairInputs in{B,
                 {p.omega[0].data(), p.omega[1].data(), p.omega[2].data()},
-                R,
-                p.mass.data(),
                 hist.hS.data(),
                 pairC.data(),
                 dt};
@@ -68,28 +83,27 @@ void DemSolver::Impl::forces(bool update) {
   std::int64_t worstId = -1, worstPartner = 0;
   // passes 2 and 3 over the chunk gathered so far
   const auto flush = [&] {
-    if (nMat == 1)
+    if (single)
       pairChunk<M, Rolling, true>(in, update, ch);
     else
       pairChunk<M, Rolling, false>(in, update, ch);
-    const double* W[3] = {in.w[0], in.w[1], in.w[2]};
     for (int k = 0; k < ch.m; ++k) {
       const auto i = static_cast<std::size_t>(ch.i[k]);
-      const double ri = R[i];
+      const Body& bi = B[i];
+      const double ri = bi.r;
       double* sh = &hist.hS[3 * static_cast<std::size_t>(ch.slot[k])];
       if (ch.wall[k] >= 0) {
         const int w = ch.wall[k], d = w / 2, s = w % 2;
-        const double xi = X[d][i];
+        const double xi = bi.x[d];
         const double dist = s == 0 ? xi - bins.origin[d] : bins.origin[d] + bins.L[d] - xi;
         const double delta = ri - dist;
         double nrm[3] = {0, 0, 0};
         nrm[d] = s == 0 ? 1.0 : -1.0;
-        const double vi[3] = {in.v[0][i], in.v[1][i], in.v[2][i]};
-        const double wi[3] = {W[0][i], W[1][i], W[2][i]};
+        const double wi[3] = {in.w[0][i], in.w[1][i], in.w[2][i]};
         const double ws[3] = {ri * wi[0], ri * wi[1], ri * wi[2]};
         double F[3] = {FX[0][i], FX[1][i], FX[2][i]}, T[3] = {TX[0][i], TX[1][i], TX[2][i]};
         detail::contactForce<M>(wallC[static_cast<std::size_t>(mat[i])], dt, update, nrm, delta, ri,
-                                in.mass[i], ri, vi, ws, wi, sh, F, T);
+                                bi.m, ri, bi.v, ws, wi, sh, F, T);
         for (int c = 0; c < 3; ++c) FX[c][i] = F[c], TX[c][i] = T[c];
         ++nw;
         const double ov = delta / ri;
@@ -97,7 +111,7 @@ void DemSolver::Impl::forces(bool update) {
         continue;
       }
       const auto u = static_cast<std::size_t>(ch.u[k]);
-      const double rj = R[u];
+      const double rj = B[u].r;
       for (int c = 0; c < 3; ++c) sh[c] = ch.shear[c][k];
       if (i < n) {
         for (int c = 0; c < 3; ++c) {
@@ -128,32 +142,37 @@ void DemSolver::Impl::forces(bool update) {
   // pass 1: every entry in list order; a touching one is appended (the store is unconditional,
   // the count advances by the test), a contact that starts or ends takes or frees its slot
   ch.m = 0;
+  constexpr int kAhead = 24;
+  const int eLast = std::max(list.rowStart[nAll] - 1, 0);
   for (std::size_t q = 0; q < nAll; ++q) {
     const int e0 = list.rowStart[q], e1 = list.rowStart[q + 1];
     if (e0 == e1) continue;
     const auto i = static_cast<std::size_t>(bins.binItems[q]);
-    const double ri = R[i];
-    const double xi[3] = {X[0][i], X[1][i], X[2][i]};
-    const int coefRow = mat[i] * nMat;
+    const Body& bi = B[i];
+    const double ri = bi.r;
+    const double xi[3] = {bi.x[0], bi.x[1], bi.x[2]};
+    const int coefRow = single ? 0 : mat[i] * nMat;
     for (int e = e0; e < e1; ++e) {
       const int j = nbrs[e];
       const int k = ch.m;
+      // the partner of the entry kAhead on, whose line the distance test will read
+      __builtin_prefetch(B + std::max(nbrs[std::min(e + kAhead, eLast)], 0));
       bool touch;
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
-        const double dx[3] = {xi[0] - X[0][u], xi[1] - X[1][u], xi[2] - X[2][u]};
+        const Body& bu = B[u];
+        const double dx[3] = {xi[0] - bu.x[0], xi[1] - bu.x[1], xi[2] - bu.x[2]};
         const double r2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
-        const double rs = ri + R[u];
+        const double rs = ri + bu.r;
         touch = !(r2 >= rs * rs);
-        // the partner's rows that passes 2 and 3 read and write, fetched a chunk ahead
+        // the partner's lines that passes 2 and 3 read and write, fetched a chunk ahead
         for (int c = 0; c < 3; ++c) {
-          __builtin_prefetch(in.v[c] + u);
           __builtin_prefetch(in.w[c] + u);
           __builtin_prefetch(FX[c] + u, 1);
           __builtin_prefetch(TX[c] + u, 1);
         }
         ch.u[k] = j;
-        ch.coef[k] = coefRow + mat[u];
+        ch.coef[k] = single ? 0 : coefRow + mat[u];
         ch.wall[k] = -1;
         for (int c = 0; c < 3; ++c) ch.dx[c][k] = dx[c];
         ch.r2[k] = r2;

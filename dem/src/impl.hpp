@@ -102,6 +102,12 @@ struct DemSolver::Impl {
   detail::GhostPlan ghosts;
   std::vector<int> perm, iscr, inScr;  // scratch (grow-only)
   detail::PairChunk chunk;             // the force loop's touching pairs (pairs.hpp)
+  // the force loop's packed particles (pairs.hpp: Body). `packed`: the rows of `body` match
+  // the particles (same order and count) since the last force computation, i.e. no rebuild
+  // since (rebuild() clears it); the step then keeps them current: initialIntegrate writes the
+  // owned bodies and resets the force and torque sums (gravity + fExt) after its half kick.
+  std::vector<detail::Body> body;
+  bool packed = false;
 
   long long rebuilds = 0, steps = 0;
   // what the last force computation saw (forces.cpp): contacts of owned particles, wall
@@ -172,9 +178,11 @@ struct DemSolver::Impl {
   void sortByBin();
   void buildLists();
   // forces.cpp
-  void computeForces(bool update);
+  /// Forces at the current state into f and torque; `stepped`: inside the step, where the owned
+  /// bodies and the reset sums are current when `packed` (initialIntegrate).
+  void computeForces(bool update, bool stepped = false);
   template <Model M, bool Rolling>
-  void forces(bool update);
+  void forces(bool update, bool stepped);
   // state.cpp
   int ownerRank(const double* x) const;
   void restore(DemState& st);

@@ -33,12 +33,18 @@ struct PairChunk {
   int m = 0;
 };
 
-/// The particle columns pass 2 reads (SoA, index = local particle).
+/// One particle as the force loop reads it, packed in one cache line (kept current by the
+/// integration, pairs.hpp users: dem.cpp, forces.cpp): the distance test of pass 1 reads x and r
+/// of a partner from one line instead of four columns, pass 2 its r, v and m from that line.
+struct alignas(64) Body {
+  double x[3], r, v[3], m;
+};
+static_assert(sizeof(Body) == 64);
+
+/// What pass 2 reads besides the chunk.
 struct PairInputs {
-  const double* v[3];
-  const double* w[3];
-  const double* radius;
-  const double* mass;
+  const Body* body;        // index = local particle
+  const double* w[3];      // angular velocity columns
   const double* hS;        // history pool, 3 per slot
   const PairCoeff* coeff;  // [material_i * nMat + material_j]
   double dt;
@@ -50,10 +56,10 @@ struct PairInputs {
 template <Model M, bool Rolling, bool Single>
 inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
   const int m = ch.m;
-  // the columns as locals (loads of the pointers inside the loop would block the vectoriser)
-  const double *V0 = in.v[0], *V1 = in.v[1], *V2 = in.v[2];
+  // the inputs as locals (loads of the pointers inside the loop would block the vectoriser)
+  const Body* B = in.body;
   const double *W0 = in.w[0], *W1 = in.w[1], *W2 = in.w[2];
-  const double *R = in.radius, *Ms = in.mass, *hS = in.hS;
+  const double* hS = in.hS;
   const PairCoeff* coeff = in.coeff;
   const double dt = in.dt;
   // ivdep: the lanes are independent (each writes its own k). Not `omp simd`: it would make the
@@ -61,7 +67,8 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
 #pragma GCC ivdep
   for (int k = 0; k < m; ++k) {
     const int i = ch.i[k], u = ch.u[k];
-    const double ri = R[i], rj = R[u], mi = Ms[i], mj = Ms[u];
+    const Body &bi = B[i], &bu = B[u];
+    const double ri = bi.r, rj = bu.r, mi = bi.m, mj = bu.m;
     // R* and m* with one division, independent of the distance
     const double rs = ri + rj, msum = mi + mj;
     const double q0 = 1.0 / (rs * msum);
@@ -72,7 +79,7 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
     const double nrm[3] = {ch.dx[0][k] * inv, ch.dx[1][k] * inv, ch.dx[2][k] * inv};
     const double delta = rs - r;
     const double wi[3] = {W0[i], W1[i], W2[i]}, wj[3] = {W0[u], W1[u], W2[u]};
-    const double vr[3] = {V0[i] - V0[u], V1[i] - V1[u], V2[i] - V2[u]};
+    const double vr[3] = {bi.v[0] - bu.v[0], bi.v[1] - bu.v[1], bi.v[2] - bu.v[2]};
     const double ws[3] = {ri * wi[0] + rj * wj[0], ri * wi[1] + rj * wj[1],
                           ri * wi[2] + rj * wj[2]};
     const double wr[3] = {wi[0] - wj[0], wi[1] - wj[1], wi[2] - wj[2]};
