@@ -129,9 +129,9 @@ void BM_PressureOptions(benchmark::State& state) {
   const Variant variants[] = {
       {"rbgs (before issue 16)", {.relax = Rbgs, .skipRelax = false}},
       {"weighted_jacobi", {.relax = WJac, .skipRelax = false}},
-      {"rbgs skip", {.relax = Rbgs, .skipRelax = true}},
+      {"rbgs skip (default)", {.relax = Rbgs, .skipRelax = true}},
       {"rbgs non_galerkin", {.relax = Rbgs, .rap = NonGalerkin, .skipRelax = false}},
-      {"weighted_jacobi skip (default)", {.relax = WJac, .skipRelax = true}},
+      {"weighted_jacobi skip (fluid-channel)", {.relax = WJac, .skipRelax = true}},
       {"rbgs skip non_galerkin", {.relax = Rbgs, .rap = NonGalerkin, .skipRelax = true}},
       {"weighted_jacobi skip non_galerkin", {.relax = WJac, .rap = NonGalerkin, .skipRelax = true}},
       {"rbgs, no pcg", {.pcg = false, .relax = Rbgs, .skipRelax = false}},

@@ -33,7 +33,7 @@ class PressureSolver {
     double tol = 1e-8;  // stopping test, see solve()
     int maxIter = 200;  // iteration cap (PCG iterations, or multigrid cycles without PCG)
     bool pcg = true;    // PCG + one cycle as preconditioner; false: the cycle alone
-    Relax relax = Relax::WeightedJacobi;  // PFMG only, like rap and skipRelax
+    Relax relax = Relax::RbgsSymmetric;  // PFMG only, like rap and skipRelax
     Rap rap = Rap::Galerkin;
     bool skipRelax = true;
     int preSweeps = 1, postSweeps = 1;  // per level and cycle (SMG too)
