@@ -121,8 +121,9 @@ void declareConfig(Schema& s) {
            "non_galerkin (7-point stencils on every level, averaged coefficients)",
            {"galerkin", "non_galerkin"});
   s.boolean("fluid.pressure.pfmg.skip_relax", true,
-            "PFMG smooths only on the levels that complete a coarsening in every direction "
-            "(hypre's skip_relax: PFMG coarsens one axis a level; meant for isotropic grids)");
+            "PFMG smooths the finest level and then only where its coarsening (one axis a "
+            "level) returns to an axis it already halved: one level in three on cubic cells "
+            "(hypre's skip_relax, for isotropic problems); false: every level");
   s.number("fluid.steady_tol", 0.0,
            "steady-state stop: max|u^{n+1}-u^n| / max|u| below this ends a fluid-only run (0: off)",
            Range::nonNegative());
