@@ -6,6 +6,9 @@
 //   right-hand side sin(pi x) sin(pi y) sin(pi z), zero initial guess, relative tolerance 1e-6;
 //   kind 0 = PCG + PFMG, 1 = PCG + SMG. Counter `iterations`: PCG iterations (PFMG's should be
 //   nearly independent of n).
+// BM_PressureOptions/variant: the same equation on the channel's 250 x 50 x 50 grid with the
+//   PFMG options of one row of its table (relaxation, skip, coarse operators, PCG or not):
+//   set-up and solve time of each (docs/fv.md, "Pressure solver options").
 // BM_FluidChannelStep/n: one fluid step of bench/cases/fluid-channel.json with 5n x n x n cells
 //   (n = 50 is the 625,000-cell benchmark), after 3 warm-up steps. Counters: seconds per step
 //   (the manual time), cell_steps_per_s, pressure iterations per step, peak RSS bytes per cell.
@@ -33,13 +36,14 @@ double threadCpuSeconds() {
 }
 
 /// The pressure equation on an nx x ny x nz box of unit spacing-scaled cells (see the header).
-void solvePressure(benchmark::State& state, Int3 n, long long kindArg) {
-  const auto kind = kindArg == 0 ? fv::PressureSolver::Kind::Pfmg : fv::PressureSolver::Kind::Smg;
+void solvePressure(benchmark::State& state, Int3 n, fv::PressureSolver::Options opt) {
   GlobalGrid g;
   g.cells = n;
   g.length = {1.0, static_cast<double>(n[1]) / n[0], static_cast<double>(n[2]) / n[0]};
   const auto dec = Decomposition::uniform(Comm::world(), g);
-  fv::PressureSolver ps(dec, kind, 1e-6, 200);
+  opt.tol = 1e-6;
+  opt.maxIter = 200;
+  fv::PressureSolver ps(dec, opt);
   const Int3 c = dec.cells();
   const std::size_t cells = static_cast<std::size_t>(dec.ownedCellCount());
   std::vector<double> A(7 * cells), b(cells), x(cells, 0.0);
@@ -93,9 +97,15 @@ void solvePressure(benchmark::State& state, Int3 n, long long kindArg) {
   state.counters["face_cells"] = dec.comm().max(face);
 }
 
+fv::PressureSolver::Options kindOptions(long long kindArg) {
+  fv::PressureSolver::Options o;
+  o.kind = kindArg == 0 ? fv::PressureSolver::Kind::Pfmg : fv::PressureSolver::Kind::Smg;
+  return o;
+}
+
 void BM_PressureSolve(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  solvePressure(state, {n, n, n}, state.range(1));
+  solvePressure(state, {n, n, n}, kindOptions(state.range(1)));
 }
 
 /// BM_PressureSolveBox/nx/ny/nz/kind: the same on a box (the benchmark cases' grids).
@@ -103,7 +113,34 @@ void BM_PressureSolveBox(benchmark::State& state) {
   solvePressure(state,
                 {static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
                  static_cast<int>(state.range(2))},
-                state.range(3));
+                kindOptions(state.range(3)));
+}
+
+/// BM_PressureOptions/variant: the channel's grid (250 x 50 x 50), PCG + PFMG with the options
+/// of the row `variant` of the table below (the label names it): set-up and solve cost of each.
+void BM_PressureOptions(benchmark::State& state) {
+  using PS = fv::PressureSolver;
+  constexpr auto Rbgs = PS::Relax::RbgsSymmetric, WJac = PS::Relax::WeightedJacobi;
+  constexpr auto NonGalerkin = PS::Rap::NonGalerkin;
+  struct Variant {
+    const char* name;
+    PS::Options o;
+  };
+  const Variant variants[] = {
+      {"rbgs (before issue 16)", {.relax = Rbgs, .skipRelax = false}},
+      {"weighted_jacobi", {.relax = WJac, .skipRelax = false}},
+      {"rbgs skip (default)", {.relax = Rbgs, .skipRelax = true}},
+      {"rbgs non_galerkin", {.relax = Rbgs, .rap = NonGalerkin, .skipRelax = false}},
+      {"weighted_jacobi skip (fluid-channel)", {.relax = WJac, .skipRelax = true}},
+      {"rbgs skip non_galerkin", {.relax = Rbgs, .rap = NonGalerkin, .skipRelax = true}},
+      {"weighted_jacobi skip non_galerkin", {.relax = WJac, .rap = NonGalerkin, .skipRelax = true}},
+      {"rbgs, no pcg", {.pcg = false, .relax = Rbgs, .skipRelax = false}},
+      {"rbgs non_galerkin, no pcg",
+       {.pcg = false, .relax = Rbgs, .rap = NonGalerkin, .skipRelax = false}},
+  };
+  const auto& v = variants[state.range(0)];
+  state.SetLabel(v.name);
+  solvePressure(state, {250, 50, 50}, v.o);
 }
 
 void BM_FluidChannelStep(benchmark::State& state) {
@@ -162,6 +199,11 @@ BENCHMARK(BM_PressureSolveBox)
     ->Args({72, 6, 72, 0})     // case3-small
     ->Args({110, 22, 22, 0})   // case2-small
     ->Args({240, 20, 240, 0})  // case 3
+    ->Iterations(3)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PressureOptions)
+    ->DenseRange(0, 8)
     ->Iterations(3)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

@@ -149,6 +149,10 @@ constexpr double kBaseBytes = 24e6;
 constexpr double kFluidBytesPerCell = 434;     // per ghosted cell, hypre included
 constexpr double kCouplingBytesPerCell = 118;  // per ghosted cell
 constexpr double kParticleBytes = 400;         // per particle
+// PFMG options that hold more (fluid-channel.json at 78k, 320k and 625k cells, 2 steps): the
+// (weighted) Jacobi smoother on Galerkin levels +118..123, PFMG without PCG +96..104.
+constexpr double kJacobiBytesPerCell = 125;    // per ghosted cell
+constexpr double kNoKrylovBytesPerCell = 105;  // per ghosted cell
 
 MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particles) {
   MemoryEstimate m;
@@ -158,7 +162,17 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
   m.particles = mode == RunMode::FluidOnly ? 0.0 : particles;
   m.baseBytes = kBaseBytes;
   const double g = static_cast<double>(m.ghostedCells);
-  if (mode != RunMode::ParticlesOnly) m.fluidBytes = kFluidBytesPerCell * g;
+  if (mode != RunMode::ParticlesOnly) {
+    double perCell = kFluidBytesPerCell;
+    if (cfg.string("fluid.pressure.solver") == "pfmg") {
+      const std::string relax = cfg.string("fluid.pressure.pfmg.relax");
+      if ((relax == "jacobi" || relax == "weighted_jacobi") &&
+          cfg.string("fluid.pressure.pfmg.rap") == "galerkin")
+        perCell += kJacobiBytesPerCell;
+      if (cfg.string("fluid.pressure.krylov") == "none") perCell += kNoKrylovBytesPerCell;
+    }
+    m.fluidBytes = perCell * g;
+  }
   if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
     m.couplingBytes = kCouplingBytesPerCell * g;
   m.particleBytes = kParticleBytes * m.particles;

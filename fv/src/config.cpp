@@ -83,13 +83,47 @@ void declareConfig(Schema& s) {
   s.string("fluid.time_scheme", "ab2",
            "explicit terms: ab2 (Adams-Bashforth 2, variable step) or euler (1st order)",
            {"ab2", "euler"});
-  s.string("fluid.pressure.solver", "pfmg", "preconditioner of hypre Struct PCG", {"pfmg", "smg"});
+  s.string("fluid.pressure.solver", "pfmg",
+           "hypre Struct multigrid: PCG's preconditioner (or alone with fluid.pressure.krylov = "
+           "none)",
+           {"pfmg", "smg"});
   s.number("fluid.pressure.tol", 1.0e-8,
            "PCG stops when ||r||_2 <= tol * max(||b||_2, ||s||_2), s the per-cell flux scale "
            "sum_f |eps_f u*_f|/h + |d eps/dt| (the divergence left is below tol of the fluxes "
            "through the cells)",
            Range::openClosed(0.0, 1.0));
-  s.integer("fluid.pressure.max_iter", 200, "PCG iteration cap", Range::atLeast(1));
+  s.integer("fluid.pressure.max_iter", 200,
+            "iteration cap: PCG iterations, or multigrid cycles with fluid.pressure.krylov = none",
+            Range::atLeast(1));
+  s.string("fluid.pressure.krylov", "pcg",
+           "pcg: PCG preconditioned by one multigrid cycle; none: the multigrid cycle alone, "
+           "repeated until the same stopping test (docs/fv.md, pressure solver options)",
+           {"pcg", "none"});
+  s.string("fluid.pressure.initial_guess", "previous",
+           "the solve starts from the previous step's pressure (previous; it is in the "
+           "checkpoint) or from zero",
+           {"previous", "zero"});
+  s.integer("fluid.pressure.pre_sweeps", 1,
+            "smoothing sweeps before the coarse-grid correction, per level and cycle (PFMG, SMG)",
+            Range::between(0, 10));
+  s.integer("fluid.pressure.post_sweeps", 1,
+            "smoothing sweeps after the coarse-grid correction, per level and cycle (PFMG, "
+            "SMG); pre_sweeps + post_sweeps >= 1, and equal for a symmetric PCG preconditioner",
+            Range::between(0, 10));
+  s.string("fluid.pressure.pfmg.relax", "rbgs",
+           "PFMG smoother: rbgs (red-black Gauss-Seidel, black-red after the correction: "
+           "symmetric), weighted_jacobi (weight per level from the grid spacings: fewer, cheaper "
+           "iterations but a 2.4x set-up, for a matrix set up once, e.g. fluid-only runs), "
+           "jacobi, rbgs_nonsymmetric (red-black both times: not symmetric, for krylov = none)",
+           {"jacobi", "weighted_jacobi", "rbgs", "rbgs_nonsymmetric"});
+  s.string("fluid.pressure.pfmg.rap", "galerkin",
+           "PFMG coarse operators: galerkin (R A P; 7-point stencils grow to 15/19 points) or "
+           "non_galerkin (7-point stencils on every level, averaged coefficients)",
+           {"galerkin", "non_galerkin"});
+  s.boolean("fluid.pressure.pfmg.skip_relax", true,
+            "PFMG smooths the finest level and then only where its coarsening (one axis a "
+            "level) returns to an axis it already halved: one level in three on cubic cells "
+            "(hypre's skip_relax, for isotropic problems); false: every level");
   s.number("fluid.steady_tol", 0.0,
            "steady-state stop: max|u^{n+1}-u^n| / max|u| below this ends a fluid-only run (0: off)",
            Range::nonNegative());
@@ -112,10 +146,27 @@ FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid) {
   p.convection = cfg.string("fluid.convection") == "central" ? Convection::Central
                  : cfg.string("fluid.limiter") == "minmod"   ? Convection::Minmod
                                                              : Convection::VanLeer;
-  p.solver = cfg.string("fluid.pressure.solver") == "smg" ? PressureSolver::Kind::Smg
-                                                          : PressureSolver::Kind::Pfmg;
-  p.pressureTol = cfg.number("fluid.pressure.tol");
-  p.pressureMaxIter = static_cast<int>(cfg.integer("fluid.pressure.max_iter"));
+  auto& o = p.pressure;
+  o.kind = cfg.string("fluid.pressure.solver") == "smg" ? PressureSolver::Kind::Smg
+                                                        : PressureSolver::Kind::Pfmg;
+  o.tol = cfg.number("fluid.pressure.tol");
+  o.maxIter = static_cast<int>(cfg.integer("fluid.pressure.max_iter"));
+  o.pcg = cfg.string("fluid.pressure.krylov") == "pcg";
+  o.preSweeps = static_cast<int>(cfg.integer("fluid.pressure.pre_sweeps"));
+  o.postSweeps = static_cast<int>(cfg.integer("fluid.pressure.post_sweeps"));
+  if (o.preSweeps + o.postSweeps == 0)
+    throw ConfigError("fluid.pressure.post_sweeps",
+                      "fluid.pressure.pre_sweeps and post_sweeps are both 0: the multigrid cycle "
+                      "would not smooth at all");
+  const std::string relax = cfg.string("fluid.pressure.pfmg.relax");
+  o.relax = relax == "jacobi"            ? PressureSolver::Relax::Jacobi
+            : relax == "weighted_jacobi" ? PressureSolver::Relax::WeightedJacobi
+            : relax == "rbgs"            ? PressureSolver::Relax::RbgsSymmetric
+                                         : PressureSolver::Relax::RbgsNonsymmetric;
+  o.rap = cfg.string("fluid.pressure.pfmg.rap") == "galerkin" ? PressureSolver::Rap::Galerkin
+                                                              : PressureSolver::Rap::NonGalerkin;
+  o.skipRelax = cfg.boolean("fluid.pressure.pfmg.skip_relax");
+  p.warmStart = cfg.string("fluid.pressure.initial_guess") == "previous";
   p.bc = boundaryFromConfig(cfg, grid);
   return p;
 }

@@ -64,7 +64,7 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
   sol.assign(n, 0.0);
   cellHalo = HaloPlan(dec, cl);
   for (int c = 0; c < 3; ++c) faceHalo[c] = HaloPlan(dec, f.u[c].layout());
-  ps = std::make_unique<PressureSolver>(dec, prm.solver, prm.pressureTol, prm.pressureMaxIter);
+  ps = std::make_unique<PressureSolver>(dec, prm.pressure);
   fillGhosts();
   // Warm the halo buffers for the largest field count (no allocation in the time loop).
   {

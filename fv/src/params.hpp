@@ -23,10 +23,9 @@ struct FluidParams {
   Real3 g{0, 0, 0};       // gravity + fluid.body_force (m/s^2)
   Real3 initialVelocity{0, 0, 0};
   Convection convection = Convection::VanLeer;  // fluid.convection, fluid.limiter
-  PressureSolver::Kind solver = PressureSolver::Kind::Pfmg;
-  double pressureTol = 0;   // fluid.pressure.tol
-  int pressureMaxIter = 0;  // fluid.pressure.max_iter
-  BoxBc bc;                 // fluid.boundary.*, fluid.patches
+  PressureSolver::Options pressure;             // fluid.pressure.* but initial_guess
+  bool warmStart = true;                        // fluid.pressure.initial_guess == previous
+  BoxBc bc;                                     // fluid.boundary.*, fluid.patches
 };
 
 /// Reads and checks the keys (ConfigError naming the key).

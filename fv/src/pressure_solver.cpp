@@ -2,6 +2,7 @@
 
 #include <HYPRE_utilities.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -31,8 +32,8 @@ void check(HYPRE_Int err, const char* what) {
 }
 }  // namespace
 
-PressureSolver::PressureSolver(const Decomposition& dec, Kind kind, double tol, int maxIter)
-    : comm_(dec.comm().raw()), kind_(kind), tol_(tol), maxIter_(maxIter) {
+PressureSolver::PressureSolver(const Decomposition& dec, const Options& options)
+    : comm_(dec.comm().raw()), opt_(options) {
   ensureHypreInitialized();
   const auto& g = dec.grid();
   for (int d = 0; d < 3; ++d) {
@@ -71,14 +72,48 @@ PressureSolver::~PressureSolver() {
 
 void PressureSolver::destroySolver() {
   if (pcg_) HYPRE_StructPCGDestroy(pcg_);
-  if (precond_) {
-    if (kind_ == Kind::Pfmg)
-      HYPRE_StructPFMGDestroy(precond_);
+  if (mg_) {
+    if (opt_.kind == Kind::Pfmg)
+      HYPRE_StructPFMGDestroy(mg_);
     else
-      HYPRE_StructSMGDestroy(precond_);
+      HYPRE_StructSMGDestroy(mg_);
   }
-  pcg_ = precond_ = nullptr;
+  pcg_ = mg_ = nullptr;
   ready_ = false;
+}
+
+void PressureSolver::createMultigrid(bool asPreconditioner) {
+  // As PCG's preconditioner: one cycle from a zero guess, no stopping test. Alone: cycles from
+  // the caller's guess until the relative test that solve() sets (logging for the residual).
+  const int maxIter = asPreconditioner ? 1 : opt_.maxIter;
+  const int logging = asPreconditioner ? 0 : 1;
+  if (opt_.kind == Kind::Pfmg) {
+    check(HYPRE_StructPFMGCreate(comm_, &mg_), "PFMG create");
+    HYPRE_StructPFMGSetMaxIter(mg_, maxIter);
+    HYPRE_StructPFMGSetTol(mg_, 0.0);
+    if (asPreconditioner)
+      HYPRE_StructPFMGSetZeroGuess(mg_);
+    else
+      HYPRE_StructPFMGSetNonZeroGuess(mg_);
+    HYPRE_StructPFMGSetRelaxType(mg_, static_cast<HYPRE_Int>(opt_.relax));
+    HYPRE_StructPFMGSetRAPType(mg_, static_cast<HYPRE_Int>(opt_.rap));
+    HYPRE_StructPFMGSetNumPreRelax(mg_, opt_.preSweeps);
+    HYPRE_StructPFMGSetNumPostRelax(mg_, opt_.postSweeps);
+    HYPRE_StructPFMGSetSkipRelax(mg_, opt_.skipRelax ? 1 : 0);
+    HYPRE_StructPFMGSetLogging(mg_, logging);
+  } else {
+    check(HYPRE_StructSMGCreate(comm_, &mg_), "SMG create");
+    HYPRE_StructSMGSetMemoryUse(mg_, 0);
+    HYPRE_StructSMGSetMaxIter(mg_, maxIter);
+    HYPRE_StructSMGSetTol(mg_, 0.0);
+    if (asPreconditioner)
+      HYPRE_StructSMGSetZeroGuess(mg_);
+    else
+      HYPRE_StructSMGSetNonZeroGuess(mg_);
+    HYPRE_StructSMGSetNumPreRelax(mg_, opt_.preSweeps);
+    HYPRE_StructSMGSetNumPostRelax(mg_, opt_.postSweeps);
+    HYPRE_StructSMGSetLogging(mg_, logging);
+  }
 }
 
 void PressureSolver::setMatrix(std::span<double> values) {
@@ -90,60 +125,65 @@ void PressureSolver::setMatrix(std::span<double> values) {
   // hypre's PFMG/SMG setup keeps its hierarchy inside the solver object; a new matrix needs a
   // new setup, done on fresh objects (re-running Setup on the same objects leaks the old levels).
   destroySolver();
-  check(HYPRE_StructPCGCreate(comm_, &pcg_), "PCG create");
-  HYPRE_StructPCGSetTol(pcg_, tol_);
-  HYPRE_StructPCGSetAbsoluteTol(pcg_, 0.0);
-  HYPRE_StructPCGSetMaxIter(pcg_, maxIter_);
-  HYPRE_StructPCGSetTwoNorm(pcg_, 1);
-  HYPRE_StructPCGSetRelChange(pcg_, 0);
-  HYPRE_StructPCGSetPrintLevel(pcg_, 0);
-  HYPRE_StructPCGSetLogging(pcg_, 1);
-  if (kind_ == Kind::Pfmg) {
-    check(HYPRE_StructPFMGCreate(comm_, &precond_), "PFMG create");
-    HYPRE_StructPFMGSetMaxIter(precond_, 1);
-    HYPRE_StructPFMGSetTol(precond_, 0.0);
-    HYPRE_StructPFMGSetZeroGuess(precond_);
-    HYPRE_StructPFMGSetRelaxType(precond_, 2);  // symmetric red-black Gauss-Seidel
-    HYPRE_StructPFMGSetRAPType(precond_, 0);    // Galerkin coarse operators
-    HYPRE_StructPFMGSetNumPreRelax(precond_, 1);
-    HYPRE_StructPFMGSetNumPostRelax(precond_, 1);
-    HYPRE_StructPFMGSetSkipRelax(precond_, 0);
-    HYPRE_StructPFMGSetLogging(precond_, 0);
-    HYPRE_StructPCGSetPrecond(pcg_, HYPRE_StructPFMGSolve, HYPRE_StructPFMGSetup, precond_);
+  const bool pfmg = opt_.kind == Kind::Pfmg;
+  createMultigrid(opt_.pcg);
+  if (opt_.pcg) {
+    check(HYPRE_StructPCGCreate(comm_, &pcg_), "PCG create");
+    HYPRE_StructPCGSetTol(pcg_, opt_.tol);
+    HYPRE_StructPCGSetAbsoluteTol(pcg_, 0.0);
+    HYPRE_StructPCGSetMaxIter(pcg_, opt_.maxIter);
+    HYPRE_StructPCGSetTwoNorm(pcg_, 1);
+    HYPRE_StructPCGSetRelChange(pcg_, 0);
+    HYPRE_StructPCGSetPrintLevel(pcg_, 0);
+    HYPRE_StructPCGSetLogging(pcg_, 1);
+    HYPRE_StructPCGSetPrecond(pcg_, pfmg ? HYPRE_StructPFMGSolve : HYPRE_StructSMGSolve,
+                              pfmg ? HYPRE_StructPFMGSetup : HYPRE_StructSMGSetup, mg_);
+    check(HYPRE_StructPCGSetup(pcg_, A_, b_, x_), "PCG setup");
+  } else if (pfmg) {
+    check(HYPRE_StructPFMGSetup(mg_, A_, b_, x_), "PFMG setup");
   } else {
-    check(HYPRE_StructSMGCreate(comm_, &precond_), "SMG create");
-    HYPRE_StructSMGSetMemoryUse(precond_, 0);
-    HYPRE_StructSMGSetMaxIter(precond_, 1);
-    HYPRE_StructSMGSetTol(precond_, 0.0);
-    HYPRE_StructSMGSetZeroGuess(precond_);
-    HYPRE_StructSMGSetNumPreRelax(precond_, 1);
-    HYPRE_StructSMGSetNumPostRelax(precond_, 1);
-    HYPRE_StructPCGSetPrecond(pcg_, HYPRE_StructSMGSolve, HYPRE_StructSMGSetup, precond_);
+    check(HYPRE_StructSMGSetup(mg_, A_, b_, x_), "SMG setup");
   }
-  check(HYPRE_StructPCGSetup(pcg_, A_, b_, x_), "PCG setup");
   ready_ = true;
   ++setups_;
 }
 
 int PressureSolver::solve(std::span<double> b, std::span<double> x, double scale) {
   if (!ready_) throw Error("PressureSolver::solve before setMatrix");
-  HYPRE_StructPCGSetAbsoluteTol(pcg_, tol_ * scale);
-  check(HYPRE_StructVectorSetBoxValues(b_, ilower_, iupper_, b.data()), "rhs values");
-  check(HYPRE_StructVectorAssemble(b_), "rhs assemble");
-  check(HYPRE_StructVectorSetBoxValues(x_, ilower_, iupper_, x.data()), "guess values");
-  check(HYPRE_StructVectorAssemble(x_), "guess assemble");
-  check(HYPRE_StructPCGSolve(pcg_, A_, b_, x_), "PCG solve");
-  check(HYPRE_StructVectorGetBoxValues(x_, ilower_, iupper_, x.data()), "solution values");
-  HYPRE_Int it = 0;
-  HYPRE_StructPCGGetNumIterations(pcg_, &it);
-  HYPRE_Real res = 0;
-  HYPRE_StructPCGGetFinalRelativeResidualNorm(pcg_, &res);
-  lastResidual_ = res;
   double bb = 0;
   for (double v : b) bb += v * v;
   double bsum = 0;
   MPI_Allreduce(&bb, &bsum, 1, MPI_DOUBLE, MPI_SUM, comm_);
-  lastResidualNorm_ = res * std::sqrt(bsum);
+  const double bnorm = std::sqrt(bsum);
+  check(HYPRE_StructVectorSetBoxValues(b_, ilower_, iupper_, b.data()), "rhs values");
+  check(HYPRE_StructVectorAssemble(b_), "rhs assemble");
+  check(HYPRE_StructVectorSetBoxValues(x_, ilower_, iupper_, x.data()), "guess values");
+  check(HYPRE_StructVectorAssemble(x_), "guess assemble");
+  HYPRE_Int it = 0;
+  HYPRE_Real res = 0;
+  if (opt_.pcg) {
+    HYPRE_StructPCGSetAbsoluteTol(pcg_, opt_.tol * scale);
+    check(HYPRE_StructPCGSolve(pcg_, A_, b_, x_), "PCG solve");
+    HYPRE_StructPCGGetNumIterations(pcg_, &it);
+    HYPRE_StructPCGGetFinalRelativeResidualNorm(pcg_, &res);
+  } else {
+    // The cycles' own test is relative to ||b||: the same ||r|| <= tol max(||b||, scale).
+    const double rel = bnorm > 0 ? opt_.tol * std::max(bnorm, scale) / bnorm : opt_.tol;
+    if (opt_.kind == Kind::Pfmg) {
+      HYPRE_StructPFMGSetTol(mg_, rel);
+      check(HYPRE_StructPFMGSolve(mg_, A_, b_, x_), "PFMG solve");
+      HYPRE_StructPFMGGetNumIterations(mg_, &it);
+      HYPRE_StructPFMGGetFinalRelativeResidualNorm(mg_, &res);
+    } else {
+      HYPRE_StructSMGSetTol(mg_, rel);
+      check(HYPRE_StructSMGSolve(mg_, A_, b_, x_), "SMG solve");
+      HYPRE_StructSMGGetNumIterations(mg_, &it);
+      HYPRE_StructSMGGetFinalRelativeResidualNorm(mg_, &res);
+    }
+  }
+  check(HYPRE_StructVectorGetBoxValues(x_, ilower_, iupper_, x.data()), "solution values");
+  lastResidual_ = res;
+  lastResidualNorm_ = res * bnorm;
   return static_cast<int>(it);
 }
 

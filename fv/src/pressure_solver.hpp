@@ -1,11 +1,12 @@
 // fv/src/pressure_solver.hpp — the pressure equation on hypre's Struct interface (private).
 //
 // One 7-point Struct matrix over the global cell grid (periodic axes passed to
-// HYPRE_StructGridSetPeriodic), one right-hand side and one solution vector, PCG preconditioned
-// by one V-cycle of PFMG (default: symmetric red-black Gauss-Seidel, one pre- and one
-// post-smoothing sweep, Galerkin coarse operators) or of SMG. Grid, stencil, matrix and vectors
-// are created once; setMatrix() refreshes the values and redoes the (unavoidable) multigrid
-// setup, which the fluid calls only when eps, K or -- with drag -- dt changed.
+// HYPRE_StructGridSetPeriodic), one right-hand side and one solution vector, solved by PCG
+// preconditioned by one V-cycle of PFMG or SMG, or by the multigrid cycle alone iterated to
+// the same stopping test (Options::pcg = false). PFMG's smoother, coarse operators and sweeps
+// are Options (docs/fv.md, "Pressure solver options"). Grid, stencil, matrix and vectors are
+// created once; setMatrix() refreshes the values and redoes the (unavoidable) multigrid setup,
+// which the fluid calls only when eps, K or -- with drag -- dt changed.
 //
 // Stencil entry order per cell: 0 centre, 1 -x, 2 +x, 3 -y, 4 +y, 5 -z, 6 +z; values are laid
 // out entry fastest, then x, y, z over this rank's block (hypre's SetBoxValues order).
@@ -23,7 +24,23 @@ namespace coloc::fv {
 class PressureSolver {
  public:
   enum class Kind { Pfmg, Smg };
-  PressureSolver(const Decomposition& dec, Kind kind, double tol, int maxIter);
+  /// PFMG's smoother (hypre's relax_type numbers).
+  enum class Relax { Jacobi = 0, WeightedJacobi = 1, RbgsSymmetric = 2, RbgsNonsymmetric = 3 };
+  /// PFMG's coarse operators (hypre's rap_type numbers).
+  enum class Rap { Galerkin = 0, NonGalerkin = 1 };
+  struct Options {
+    Kind kind = Kind::Pfmg;
+    double tol = 1e-8;  // stopping test, see solve()
+    int maxIter = 200;  // iteration cap (PCG iterations, or multigrid cycles without PCG)
+    bool pcg = true;    // PCG + one cycle as preconditioner; false: the cycle alone
+    Relax relax = Relax::RbgsSymmetric;  // PFMG only, like rap and skipRelax
+    Rap rap = Rap::Galerkin;
+    bool skipRelax = true;
+    int preSweeps = 1, postSweeps = 1;  // per level and cycle (SMG too)
+  };
+  PressureSolver(const Decomposition& dec, const Options& options);
+  PressureSolver(const Decomposition& dec, Kind kind, double tol, int maxIter)
+      : PressureSolver(dec, Options{.kind = kind, .tol = tol, .maxIter = maxIter}) {}
   ~PressureSolver();
   PressureSolver(const PressureSolver&) = delete;
   PressureSolver& operator=(const PressureSolver&) = delete;
@@ -31,9 +48,9 @@ class PressureSolver {
   /// New matrix values (7 per owned cell, see above); rebuilds the preconditioner.
   void setMatrix(std::span<double> values);
   /// Solve A x = b to ||r||_2 <= tol max(||b||_2, scale): `scale` is the norm of the flux scale
-  /// of the right-hand side (so a right-hand side that is only round-off does not ask PCG for
-  /// round-off digits). `x` holds the initial guess on entry and the solution on exit (owned
-  /// cells, x fastest). Returns the PCG iteration count.
+  /// of the right-hand side (so a right-hand side that is only round-off does not ask the
+  /// solver for round-off digits). `x` holds the initial guess on entry and the solution on
+  /// exit (owned cells, x fastest). Returns the iteration count (PCG iterations, or cycles).
   int solve(std::span<double> b, std::span<double> x, double scale);
   double lastResidualNorm() const { return lastResidualNorm_; }
   double lastRelativeResidual() const { return lastResidual_; }
@@ -41,16 +58,15 @@ class PressureSolver {
 
  private:
   void destroySolver();
+  void createMultigrid(bool asPreconditioner);
   MPI_Comm comm_;
-  Kind kind_;
-  double tol_;
-  int maxIter_;
+  Options opt_;
   HYPRE_Int ilower_[3], iupper_[3];
   HYPRE_StructGrid grid_ = nullptr;
   HYPRE_StructStencil stencil_ = nullptr;
   HYPRE_StructMatrix A_ = nullptr;
   HYPRE_StructVector b_ = nullptr, x_ = nullptr;
-  HYPRE_StructSolver pcg_ = nullptr, precond_ = nullptr;
+  HYPRE_StructSolver pcg_ = nullptr, mg_ = nullptr;
   bool ready_ = false;
   double lastResidual_ = 0, lastResidualNorm_ = 0;
   int setups_ = 0;

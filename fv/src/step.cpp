@@ -244,6 +244,7 @@ void FluidSolver::Impl::assemblePressureRhs(double dt) {
   Int3 badCell{-1, -1, -1};
   double badValue = 0;
   const double idt = 1.0 / dt;
+  const bool warm = prm.warmStart;
   const double* en = f.eps.data().data();
   const double* eo = f.epsOld.data().data();
   for (int k = 0; k < n[2]; ++k)
@@ -279,7 +280,7 @@ void FluidSolver::Impl::assemblePressureRhs(double dt) {
         dvol += de;
         dvolGross += std::fabs(de);
         sum += rhs[r];
-        sol[r] = f.p.data()[c] * dt;  // warm start
+        sol[r] = warm ? f.p.data()[c] * dt : 0.0;  // initial guess
       }
   dVolLocal = dvol * dec.grid().cellVolume() / dt;
   dVolGrossLocal = dvolGross * dec.grid().cellVolume() / dt;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "fv_test_util.hpp"
@@ -21,7 +22,8 @@ struct TgvError {
   int itMax;
 };
 
-TgvError tgv(int n, const std::string& solver = "pfmg") {
+/// `pressure`: more keys of fluid.pressure, e.g. R"(, "krylov": "none")".
+TgvError tgv(int n, const std::string& solver = "pfmg", const std::string& pressure = "") {
   const double L = 2 * M_PI, h = L / n, nu = 0.02, tEnd = 1.0;
   const std::string text = R"({
     "run": {"mode": "fluid"},
@@ -33,7 +35,7 @@ TgvError tgv(int n, const std::string& solver = "pfmg") {
     "partition": {"dims": [0, 0, 1]},
     "fluid": {"nu": 0.02, "convection": "central", "adaptive_dt": true, "dt": 1.0, "cfl": 0.4,
               "pressure": {"tol": 1e-10, "solver": ")" +
-                           solver + R"("}}
+                           solver + "\"" + pressure + R"(}}
   })";
   const Config cfg = fvtest::config(text);
   const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
@@ -103,4 +105,24 @@ TEST(FvTaylorGreen, SmgSameAsPfmg) {
   const TgvError a = tgv(16, "pfmg"), b = tgv(16, "smg");
   EXPECT_NEAR(a.ke, b.ke, 1e-8);
   EXPECT_NEAR(a.vel, b.vel, 1e-8);
+}
+
+// The pressure-solver options (docs/fv.md, "Pressure solver options") change the iterations,
+// not the flow: each gives the default's flow to the solver tolerance.
+TEST(FvTaylorGreen, PressureOptionsSameFlow) {
+  const TgvError a = tgv(16);
+  for (const char* o :
+       {R"(, "krylov": "none")", R"(, "krylov": "none", "pfmg": {"rap": "non_galerkin"})",
+        R"(, "pfmg": {"relax": "weighted_jacobi", "skip_relax": false})",
+        R"(, "pfmg": {"relax": "rbgs_nonsymmetric", "skip_relax": false}, "krylov": "none")",
+        R"(, "pfmg": {"relax": "rbgs", "skip_relax": false, "rap": "galerkin"})",
+        R"(, "pfmg": {"rap": "non_galerkin"}, "pre_sweeps": 2, "post_sweeps": 2)",
+        R"(, "initial_guess": "zero")", R"(, "krylov": "none", "initial_guess": "zero")"}) {
+    SCOPED_TRACE(o);
+    const TgvError b = tgv(16, "pfmg", o);
+    EXPECT_NEAR(a.ke, b.ke, 1e-8);
+    EXPECT_NEAR(a.vel, b.vel, 1e-8);
+    std::printf("%s: iterations_max %d (default %d), KE error %.3e vs %.3e\n", o, b.itMax, a.itMax,
+                b.ke, a.ke);
+  }
 }
