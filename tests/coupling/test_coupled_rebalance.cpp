@@ -41,17 +41,30 @@ std::vector<double> trajectories(coupling::Simulation& sim) {
   return s;
 }
 
-/// |tangential history| of every touching pair (a, b), a < b, on every rank (a pair split
-/// across blocks is held by both sides: the larger of the two, equal to round-off).
+/// |tangential history| of every touching pair (a, b), a < b, then of every particle-wall
+/// contact (holder, wall: partner -1 - wall), on every rank (a pair split across blocks is held
+/// by both sides: the larger of the two, equal to round-off).
+constexpr int kWalls = 6;
 std::vector<double> histories(coupling::Simulation& sim) {
-  std::vector<double> h(kCount * kCount, 0.0);
+  std::vector<double> h(kCount * kCount + kCount * kWalls, 0.0);
   const dem::DemState s = sim.particles()->saveState();
   for (const auto& c : s.contacts) {
-    const auto a = std::min(c.holder, c.partner), b = std::max(c.holder, c.partner);
     const double n =
         std::sqrt(c.shear[0] * c.shear[0] + c.shear[1] * c.shear[1] + c.shear[2] * c.shear[2]);
-    double& slot = h[static_cast<std::size_t>(a * kCount + b)];
-    slot = std::max(slot, n);
+    std::int64_t slot = -1;
+    if (c.partner < 0 && c.partner >= -kWalls && c.holder >= 0 && c.holder < kCount)
+      slot = kCount * kCount + c.holder * kWalls + (-1 - c.partner);
+    else if (c.partner >= 0) {
+      const auto a = std::min(c.holder, c.partner), b = std::max(c.holder, c.partner);
+      if (a >= 0 && b < kCount) slot = a * kCount + b;
+    }
+    if (slot < 0) {
+      ADD_FAILURE() << "contact history of holder " << c.holder << ", partner " << c.partner
+                    << ": not a particle id or a wall";
+      continue;
+    }
+    double& v = h[static_cast<std::size_t>(slot)];
+    v = std::max(v, n);
   }
   sim.decomposition().comm().maxInPlace(std::span<double>(h));
   return h;
@@ -137,7 +150,7 @@ TEST_P(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
       int pairs = 0;
       for (double v : hBefore) hmax = std::max(hmax, v);
       for (std::size_t k = 0; k < hBefore.size(); ++k) {
-        pairs += hBefore[k] > 0;
+        pairs += k < static_cast<std::size_t>(kCount) * kCount && hBefore[k] > 0;
         ASSERT_EQ(hBefore[k] > 0, hAfter[k] > 0) << "pair " << k / kCount << "-" << k % kCount;
         ASSERT_NEAR(hBefore[k], hAfter[k], 1e-12 * hmax);
       }
