@@ -56,7 +56,7 @@ def row_of(r, s, n, rep, cores):
         "frac_inter_physics": r["fractions"]["inter_physics"],
         # the across-ranks part alone (must be 0 where no byte crossed ranks)
         "frac_inter_remote": r["timers"].get("exchange_remote", {}).get("avg", 0.0) / wall,
-        "modelled_imbalance": r["partition"].get("balanced", {}).get("modelled_imbalance", ""),
+        "modelled_imbalance": r["partition"].get(s, {}).get("modelled_imbalance", ""),
     }
 
 
