@@ -8,8 +8,8 @@
 //   independent  the fluid on the uniform blocks, the DEM on blocks balanced by particle count,
 //                on a process grid other than the fluid's when one fits;
 //   tiled        one box per rank by recursive bisection of the modelled cost (partition/
-//                tiled.hpp): no process grid, so not Blocks (tiledStrategy). `coloc plan`
-//                evaluates it; runs do not take it yet (chooseBlocks refuses it).
+//                tiled.hpp): no process grid, so not Blocks (tiledStrategy; chooseBlocks
+//                refuses it). Runs build Decomposition::fromBoxes from it (coupling/layouts).
 //
 // Ranks are numbered as MPI_Cart_create numbers them without reordering: row-major over the
 // block coordinates, z fastest.
