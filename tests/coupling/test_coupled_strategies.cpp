@@ -112,8 +112,9 @@ TEST_P(Strategy, SameTrajectoriesAsSerial) {
         EXPECT_GT(r["exchange"]["inter_physics_remote"]["bytes"].get<long long>(), 0);
         // The bed fills the lower half: the DEM's blocks balanced by count differ from the
         // fluid's (a uniform suspension may keep the same grid).
-        if (std::string(P.name) == "bed")
+        if (std::string(P.name) == "bed") {
           EXPECT_NE(par.particleDecomposition().dims(), par.decomposition().dims());
+        }
       }
     } else {
       EXPECT_FALSE(par.independent());
