@@ -103,7 +103,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   // of the fluid-layout fields, whatever ghost width the fluid keeps for itself.
   FieldLayout oneLayer = layout;
   oneLayer.ghost = 1;
-  halo_ = HaloPlan(dec_, oneLayer);
+  halo_ = HaloPlan(dec_, oneLayer, layout);
 
   if (checkpoint || from) {
     // What the last step left in the coupling's own fields: the cell-centred velocity and the

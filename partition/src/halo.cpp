@@ -42,10 +42,13 @@ void unpack(std::span<Field3<double>* const> fields, const IndexBox& b, const do
 }  // namespace
 
 HaloPlan::HaloPlan(const Decomposition& dec, const FieldLayout& layout)
+    : HaloPlan(dec, layout, layout) {}
+
+HaloPlan::HaloPlan(const Decomposition& dec, const FieldLayout& layout, const FieldLayout& storage)
     : dec_(&dec), layout_(layout), me_(dec.rank()) {
   if (dec.isTiled()) {
     // refuses thin boxes now
-    box_ = std::make_shared<BoxHaloPlan>(dec.comm(), boxLayoutOf(dec), layout);
+    box_ = std::make_shared<BoxHaloPlan>(dec.comm(), boxLayoutOf(dec), layout, storage);
     return;
   }
   const int g = layout.ghost;
@@ -90,6 +93,7 @@ void HaloPlan::ensureBuffers(std::size_t nFields) {
 }
 
 BoxHaloPlan& HaloPlan::boxPlanFor(std::span<Field3<double>* const> fields) {
+  // Fields of another storage than the one given at construction: tables for theirs (once).
   if (fields.empty() || fields[0]->layout() == box_->storage()) return *box_;
   box_ =
       std::make_shared<BoxHaloPlan>(dec_->comm(), boxLayoutOf(*dec_), layout_, fields[0]->layout());

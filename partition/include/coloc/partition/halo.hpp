@@ -34,7 +34,10 @@ class HaloPlan {
  public:
   HaloPlan() = default;
   /// Throws ConfigError if a block is thinner than the ghost width along an axis with neighbours.
+  /// `storage`: the layout of the fields the plan will move (more ghost layers than `layout`
+  /// moves, or the same); a tiled plan builds its index tables for it once, here.
   HaloPlan(const Decomposition& dec, const FieldLayout& layout);
+  HaloPlan(const Decomposition& dec, const FieldLayout& layout, const FieldLayout& storage);
 
   const FieldLayout& layout() const { return layout_; }
 
