@@ -7,6 +7,7 @@
 #include <span>
 #include <string>
 
+#include "coloc/partition/tiled.hpp"
 #include "impl.hpp"
 #include "rows.hpp"
 
@@ -189,32 +190,12 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
   return out;
 }
 
-namespace {
-
-/// The cell planes every bin grid of a tiled layout must have edges on: along each axis, the
-/// distinct bounds of the boxes (0 and N included), ascending.
-std::array<std::vector<int>, 3> boxPlanes(const Decomposition& dec) {
-  std::vector<Int3> lo, hi;
-  dec.boxes(lo, hi);
-  std::array<std::vector<int>, 3> planes;
-  for (int d = 0; d < 3; ++d) {
-    auto& v = planes[static_cast<std::size_t>(d)];
-    for (std::size_t r = 0; r < lo.size(); ++r) {
-      v.push_back(lo[r][d]);
-      v.push_back(hi[r][d]);
-    }
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
-  }
-  return planes;
-}
-
-}  // namespace
-
 void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total) {
   const auto& grid = dec.grid();
-  const BinLayout b = dec.isTiled() ? binLayout(cfg, grid, boxPlanes(dec), dmax, skin, total)
-                                    : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
+  // tiled: every box bound is a bin edge (the layout's cut planes)
+  const BinLayout b = dec.isTiled()
+                          ? binLayout(cfg, grid, boxLayoutOf(dec).cutPlanes(), dmax, skin, total)
+                          : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
   bins.setup(grid, b, dec.lo(), dec.hi());
   if (dec.isTiled()) setupTargets(b);  // the tiled exchanges (ghosts_tiled.cpp)
 }

@@ -11,7 +11,18 @@
 namespace coloc {
 namespace {
 const char* kAxis[3] = {"x", "y", "z"};
+
+/// Ownership of a communicator a decomposition creates: freed with the last copy (unless MPI is
+/// already finalized).
+std::shared_ptr<MPI_Comm> ownedComm(MPI_Comm* c) {
+  return std::shared_ptr<MPI_Comm>(c, [](MPI_Comm* p) {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized && *p != MPI_COMM_NULL) MPI_Comm_free(p);
+    delete p;
+  });
 }
+}  // namespace
 
 std::vector<int> Decomposition::evenCuts(int n, int p) {
   std::vector<int> c(static_cast<std::size_t>(p) + 1);
@@ -209,12 +220,7 @@ Decomposition Decomposition::fromBoxes(const Comm& world, const GlobalGrid& grid
   }
   auto* c = new MPI_Comm(MPI_COMM_NULL);
   MPI_Comm_dup(world.raw(), c);
-  dec.cart_ = std::shared_ptr<MPI_Comm>(c, [](MPI_Comm* p) {
-    int finalized = 0;
-    MPI_Finalized(&finalized);
-    if (!finalized && *p != MPI_COMM_NULL) MPI_Comm_free(p);
-    delete p;
-  });
+  dec.cart_ = ownedComm(c);
   dec.comm_ = Comm(*dec.cart_);
   dec.rank_ = dec.comm_.rank();
   dec.size_ = dec.comm_.size();
@@ -273,12 +279,7 @@ void Decomposition::build(const Comm& world) {
   int periods[3] = {grid_.periodic[0], grid_.periodic[1], grid_.periodic[2]};
   auto* c = new MPI_Comm(MPI_COMM_NULL);
   MPI_Cart_create(world.raw(), 3, dims_.data(), periods, /*reorder=*/0, c);
-  cart_ = std::shared_ptr<MPI_Comm>(c, [](MPI_Comm* p) {
-    int finalized = 0;
-    MPI_Finalized(&finalized);
-    if (!finalized && *p != MPI_COMM_NULL) MPI_Comm_free(p);
-    delete p;
-  });
+  cart_ = ownedComm(c);
   comm_ = Comm(*cart_);
   rank_ = comm_.rank();
   size_ = comm_.size();

@@ -17,6 +17,15 @@ BoxLayout boxLayoutOf(const Decomposition& dec) {
   for (std::size_t r = 0; r < lo.size(); ++r) l.box.push_back({lo[r], hi[r]});
   return l;
 }
+
+Decomposition decompositionOf(const Comm& comm, const BoxLayout& l) {
+  std::vector<Int3> lo, hi;
+  for (const auto& b : l.box) {
+    lo.push_back(b.lo);
+    hi.push_back(b.hi);
+  }
+  return Decomposition::fromBoxes(comm, l.grid, std::move(lo), std::move(hi));
+}
 namespace {
 
 using detail::PrefixSum;

@@ -11,6 +11,7 @@
 
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/partition/setup.hpp"
+#include "coloc/partition/tiled.hpp"
 #include "coupled_util.hpp"
 
 using namespace coloc;
@@ -110,11 +111,7 @@ TEST_P(Rebalance, MovesCellsParticlesAndHistoriesTogether) {
     // Start on even blocks although most of the box is empty of particles.
     // (tiled: the even blocks as boxes).
     Decomposition evenBlocks = decompositionFromConfig(world, cfg);
-    if (strategy == "tiled") {
-      std::vector<Int3> lo, hi;
-      evenBlocks.boxes(lo, hi);
-      evenBlocks = Decomposition::fromBoxes(world, evenBlocks.grid(), lo, hi);
-    }
+    if (strategy == "tiled") evenBlocks = decompositionOf(world, boxLayoutOf(evenBlocks));
     coupling::Layouts even{std::move(evenBlocks), std::nullopt, strategy, CostModel{}, 1.0, 1.0};
     auto sim = std::make_unique<coupling::Simulation>(cfg, std::move(even));
     coupling::Simulation ser(selfComm.comm(), serialCfg);

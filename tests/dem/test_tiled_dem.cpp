@@ -19,6 +19,7 @@
 
 #include "coloc/partition/tiled.hpp"
 #include "dem_test_util.hpp"
+#include "tiled_layouts.hpp"
 
 namespace {
 
@@ -35,21 +36,10 @@ const coloc::Comm kSelf(MPI_COMM_SELF);
 Decomposition tiled(const std::string& text, int ni, int nk, int granularity = 1) {
   const GlobalGrid g = coloc::gridFromConfig(demtest::config(text));
   const coloc::Comm world = coloc::Comm::world();
-  std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 1.0);
-  for (int k = 0; k < g.cells[2]; ++k)
-    for (int j = 0; j < g.cells[1]; ++j)
-      for (int i = 0; i < g.cells[0]; ++i)
-        if (i < ni && k < nk)
-          cost[static_cast<std::size_t>(i + g.cells[0] * (j + g.cells[1] * k))] += 20.0;
   coloc::TiledOptions opt;
   opt.granularity = granularity;
-  const auto layout = coloc::tiledBoxes(g, cost, world.size(), opt).layout;
-  std::vector<Int3> lo, hi;
-  for (const auto& b : layout.box) {
-    lo.push_back(b.lo);
-    hi.push_back(b.hi);
-  }
-  return Decomposition::fromBoxes(world, g, lo, hi);
+  const auto cost = coloc::test::heapedCost(g, {ni, g.cells[1], nk}, 20.0);
+  return coloc::decompositionOf(world, coloc::tiledBoxes(g, cost, world.size(), opt).layout);
 }
 
 /// Runs `steps` sub-steps of the case on the tiled layout and serially, and compares.
@@ -177,9 +167,7 @@ TEST(DemTiled, ProcessGridAsBoxesHasTheSweepsGhosts) {
         {R"("hi": [0.03, 0.02, 0.03])", R"("hi": [0.07, 0.02, 0.03])"}})
     text.replace(text.find(from), from.size(), to);
   Case cart(text);
-  std::vector<Int3> lo, hi;
-  cart.dec.boxes(lo, hi);
-  Case boxes(text, Decomposition::fromBoxes(coloc::Comm::world(), cart.dec.grid(), lo, hi));
+  Case boxes(text, coloc::decompositionOf(coloc::Comm::world(), coloc::boxLayoutOf(cart.dec)));
   ASSERT_FALSE(cart.dec.isTiled());
   ASSERT_TRUE(boxes.dec.isTiled());
   long long ghostsDiffer = 0;

@@ -19,6 +19,7 @@
 
 #include "coloc/partition/tiled.hpp"
 #include "fv_test_util.hpp"
+#include "tiled_layouts.hpp"
 
 using namespace coloc;
 
@@ -70,19 +71,8 @@ struct Solo {
 
 /// The bisection's boxes for the communicator's ranks on a cost heaped in one corner.
 Decomposition tiledDecomposition(const Comm& world, const GlobalGrid& g) {
-  std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 1.0);
-  for (int k = 0; k < g.cells[2]; ++k)
-    for (int j = 0; j < g.cells[1]; ++j)
-      for (int i = 0; i < g.cells[0]; ++i)
-        if (i < 6 && j < 4)
-          cost[static_cast<std::size_t>(i + g.cells[0] * (j + g.cells[1] * k))] += 6.0;
-  const BoxLayout l = tiledBoxes(g, cost, world.size(), {}).layout;
-  std::vector<Int3> lo, hi;
-  for (const auto& b : l.box) {
-    lo.push_back(b.lo);
-    hi.push_back(b.hi);
-  }
-  return Decomposition::fromBoxes(world, g, lo, hi);
+  const auto cost = test::heapedCost(g, {6, 4, g.cells[2]}, 6.0);
+  return decompositionOf(world, tiledBoxes(g, cost, world.size(), {}).layout);
 }
 
 /// Max over this rank's owned entries of |a - b| and of |b|, with a on `pa` and b on `pb`

@@ -9,6 +9,7 @@
 #include "coloc/partition/box_halo.hpp"
 #include "coloc/partition/halo.hpp"
 #include "coloc/partition/tiled.hpp"
+#include "tiled_layouts.hpp"
 
 using namespace coloc;
 
@@ -32,15 +33,9 @@ GlobalGrid makeGrid(const Param& p) {
 
 /// A tiled layout of the communicator's ranks on a cost clustered in a corner.
 BoxLayout tiledLayout(const GlobalGrid& g, int ranks, int ghost) {
-  std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 1.0);
-  for (int k = 0; k < g.cells[2]; ++k)
-    for (int j = 0; j < g.cells[1]; ++j)
-      for (int i = 0; i < g.cells[0]; ++i)
-        if (i < 5 && k < 4)
-          cost[static_cast<std::size_t>(i + g.cells[0] * (j + g.cells[1] * k))] += 20.0;
   TiledOptions opt;
   opt.minCells = ghost;
-  return tiledBoxes(g, cost, ranks, opt).layout;
+  return tiledBoxes(g, test::heapedCost(g, {5, g.cells[1], 4}, 20.0), ranks, opt).layout;
 }
 
 /// An extended global index along one axis: its image in the domain, whether it lies beyond a

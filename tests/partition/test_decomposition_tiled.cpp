@@ -8,6 +8,7 @@
 #include "coloc/partition/box_halo.hpp"
 #include "coloc/partition/halo.hpp"
 #include "coloc/partition/tiled.hpp"
+#include "tiled_layouts.hpp"
 
 using namespace coloc;
 
@@ -23,22 +24,7 @@ GlobalGrid grid(std::array<bool, 3> periodic) {
 }
 
 BoxLayout clustered(const GlobalGrid& g, int ranks) {
-  std::vector<double> cost(static_cast<std::size_t>(g.cellCount()), 1.0);
-  for (int k = 0; k < g.cells[2]; ++k)
-    for (int j = 0; j < g.cells[1]; ++j)
-      for (int i = 0; i < g.cells[0]; ++i)
-        if (i < 5 && k < 4)
-          cost[static_cast<std::size_t>(i + g.cells[0] * (j + g.cells[1] * k))] += 20.0;
-  return tiledBoxes(g, cost, ranks, {}).layout;
-}
-
-Decomposition fromLayout(const Comm& world, const BoxLayout& l) {
-  std::vector<Int3> lo, hi;
-  for (const auto& b : l.box) {
-    lo.push_back(b.lo);
-    hi.push_back(b.hi);
-  }
-  return Decomposition::fromBoxes(world, l.grid, lo, hi);
+  return tiledBoxes(g, test::heapedCost(g, {5, g.cells[1], 4}, 20.0), ranks, {}).layout;
 }
 
 class TiledDecomposition : public ::testing::TestWithParam<std::array<bool, 3>> {};
@@ -47,7 +33,7 @@ TEST_P(TiledDecomposition, OwnersBoxesAndWalls) {
   Comm world(MPI_COMM_WORLD);
   const GlobalGrid g = grid(GetParam());
   const BoxLayout l = clustered(g, world.size());
-  const Decomposition dec = fromLayout(world, l);
+  const Decomposition dec = decompositionOf(world, l);
   ASSERT_TRUE(dec.isTiled());
   EXPECT_EQ(dec.rank(), world.rank());
   const auto& mine = l.box[static_cast<std::size_t>(world.rank())];
@@ -95,9 +81,7 @@ TEST_P(TiledDecomposition, ProcessGridAsBoxesHasTheGridsOwners) {
   Comm world(MPI_COMM_WORLD);
   const GlobalGrid g = grid(GetParam());
   const Decomposition cart = Decomposition::uniform(world, g);
-  std::vector<Int3> lo, hi;
-  cart.boxes(lo, hi);
-  const Decomposition boxes = Decomposition::fromBoxes(world, g, lo, hi);
+  const Decomposition boxes = decompositionOf(world, boxLayoutOf(cart));
   EXPECT_FALSE(cart.isTiled());
   for (int k = 0; k < g.cells[2]; ++k)
     for (int j = 0; j < g.cells[1]; ++j)
@@ -113,7 +97,7 @@ TEST_P(TiledDecomposition, HaloPlanForwardsToTheBoxPlan) {
   Comm world(MPI_COMM_WORLD);
   const GlobalGrid g = grid(GetParam());
   const BoxLayout l = clustered(g, world.size());
-  const Decomposition dec = fromLayout(world, l);
+  const Decomposition dec = decompositionOf(world, l);
   for (int stagger = -1; stagger < 3; ++stagger) {
     FieldLayout layout;
     layout.n = dec.cells();
@@ -145,9 +129,7 @@ TEST_P(TiledDecomposition, OneLayerPlanOnTwoLayerFieldsAsOnTheProcessGrid) {
   Comm world(MPI_COMM_WORLD);
   const GlobalGrid g = grid(GetParam());
   const Decomposition cart = Decomposition::uniform(world, g);
-  std::vector<Int3> lo, hi;
-  cart.boxes(lo, hi);
-  const Decomposition boxes = Decomposition::fromBoxes(world, g, lo, hi);
+  const Decomposition boxes = decompositionOf(world, boxLayoutOf(cart));
   FieldLayout one, two;
   one.n = two.n = cart.cells();
   one.ghost = 1;

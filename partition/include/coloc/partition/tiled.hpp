@@ -48,6 +48,8 @@ struct BoxLayout {
 
 /// The boxes of a decomposition (a process grid's blocks, or a tiled layout's boxes).
 BoxLayout boxLayoutOf(const Decomposition& dec);
+/// The tiled decomposition of `comm`'s ranks on a layout's boxes (Decomposition::fromBoxes).
+Decomposition decompositionOf(const Comm& comm, const BoxLayout& l);
 
 struct TiledOptions {
   int minCells = 2;        // thinnest box along an axis (an axis thinner than this stays whole)
