@@ -25,6 +25,11 @@ void declareRunConfig(Schema& s) {
            Range::nonNegative());
   s.number("run.progress_interval_s", 2.0, "seconds between progress lines on rank 0 (0: off)",
            Range::nonNegative());
+  s.boolean("run.timer_sync", false,
+            "timed barriers before the fluid's halo after the momentum predictor and before "
+            "the DEM's rebuild vote in every sub-step: a rank's wait for the slowest one is "
+            "booked to `sync` (fractions.wait) instead of the exchange that follows; for "
+            "measuring load imbalance (costs one barrier each)");
   s.number("run.failure_wait_s", 10.0,
            "seconds a rank that failed alone waits for the others to learn of it at the next "
            "error check; past it, it prints its message and stops every rank (MPI_Abort), so "

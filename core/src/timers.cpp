@@ -71,6 +71,13 @@ void Timers::book(Exchange kind, long long bytes, long long messages, double sec
   t.seconds += seconds;
 }
 
+void Timers::syncPoint(const Comm& comm) {
+  if (!syncPoints_ || comm.size() == 1) return;
+  start(Phase::Sync);
+  comm.barrier();
+  stop(Phase::Sync);
+}
+
 void Timers::beginRun() {
   const Slot setup = slots_[idx(Phase::Setup)];
   slots_ = {};

@@ -44,6 +44,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   steadyTol_ = cfg.number("fluid.steady_tol");
   endTime_ = cfg.number("run.end_time");
   demSubsteps_ = cfg.integer("coupling.dem_substeps");
+  timers_.setSyncPoints(cfg.boolean("run.timer_sync"));
   if (maxSteps_ == 0 && endTime_ <= 0)
     throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
   // Restart: the checkpoint is checked (status, grid, mode) and read on these blocks.

@@ -59,6 +59,7 @@ void DemSolver::Impl::substep() {
     initialIntegrate();
   }
   bool again;
+  timers.syncPoint(comm);
   {
     ScopedPhase t(timers, Phase::DemNeighbor);
     again = decideRebuild();

@@ -229,6 +229,7 @@ void FluidSolver::Impl::predictVelocity(double dt) {
   }
   // u* on the faces of the block's high side that belong to the neighbour (face n of a
   // periodic or interior block edge) enters div(eps u*).
+  timers.syncPoint(dec.comm());
   ScopedPhase t(timers, Phase::FluidHalo);
   for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
 }

@@ -124,6 +124,14 @@ class Timers {
   double seconds(Phase p) const { return slot(p).wall; }
   double busySeconds(Phase p) const { return slot(p).cpu; }
   long long calls(Phase p) const { return slot(p).calls; }
+  /// Timed barriers at the solvers' sync points (`run.timer_sync`, like LAMMPS's `timer sync`):
+  /// off by default. When on, syncPoint() waits for every rank of `comm` and books the wait to
+  /// `sync`, so that the load imbalance of the work before it is not booked to the collective
+  /// phase that follows (a halo exchange, the DEM's rebuild vote). Every rank must reach the
+  /// same sync points in the same order: the solvers call it where all ranks do.
+  void setSyncPoints(bool on) { syncPoints_ = on; }
+  bool syncPoints() const { return syncPoints_; }
+  void syncPoint(const Comm& comm);
   /// Adds one interval measured outside start/stop (e.g. across objects' lifetimes).
   void add(Phase p, double wallSeconds, double cpuSeconds);
   /// Book one exchange: bytes and messages sent by this rank, and its time.
@@ -161,6 +169,7 @@ class Timers {
   std::array<Ledger, static_cast<std::size_t>(Traffic::Count)> traffic_{};
   std::array<Phase, 16> active_{};  // the running phases, innermost last
   int nActive_ = 0;
+  bool syncPoints_ = false;
 };
 
 /// RAII phase timer: `ScopedPhase t(timers, Phase::DemForce);`
