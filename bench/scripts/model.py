@@ -106,12 +106,47 @@ def stream_memory(stream):
             "size_mib": stream["sizes_mib"][i], "loadavg": stream.get("loadavg", "")}
 
 
-def bench_points(bench, busy):
+def median(xs):
+    """The median of a non-empty list (the mean of the middle two for an even count)."""
+    v = sorted(xs)
+    m = len(v) // 2
+    return v[m] if len(v) % 2 else 0.5 * (v[m - 1] + v[m])
+
+
+def median_of(items):
+    """Element-wise median of equally shaped JSON-like values (dicts, lists, numbers); a leaf
+    that is not a number (or is missing in some) is taken from the first item."""
+    first = items[0]
+    if isinstance(first, bool) or not isinstance(first, (dict, list, int, float)):
+        return first
+    if isinstance(first, dict):
+        return {k: median_of([it[k] for it in items if isinstance(it, dict) and k in it])
+                for k in first}
+    if isinstance(first, list):
+        if not all(isinstance(it, list) and len(it) == len(first) for it in items):
+            return first
+        return [median_of([it[i] for it in items]) for i in range(len(first))]
+    nums = [it for it in items if isinstance(it, (int, float)) and not isinstance(it, bool)]
+    return median(nums) if nums else first
+
+
+def median_stream(streams):
+    """One bench_stream JSON from several runs: the median bandwidth of each rank count and
+    working set (the memory contention of one run moves with the machine's load)."""
+    out = dict(streams[0])
+    out["per_rank_Bps"] = median_of([s["per_rank_Bps"] for s in streams])
+    out["repeats"] = len(streams)
+    out["loadavg"] = "; ".join(str(s.get("loadavg", "")) for s in streams)
+    return out
+
+
+def bench_points(bench, busy, how="min"):
     """BM_PressureSolve/n/0 and BM_PressureSolveBox/nx/ny/nz/0 (bench_fv,
     --benchmark_format=json): {("cube" | "box", nx, ny, nz): (seconds per PCG iteration, set-up
     seconds, ranks)};
-    thread-CPU times with busy; the fastest of --benchmark_repetitions."""
-    pts = {}
+    thread-CPU times with busy; of --benchmark_repetitions the fastest (how="min") or the
+    median (how="median")."""
+    reps = {}
     for b in bench.get("benchmarks", []):
         parts = b["name"].split("/")
         if b.get("run_type") == "aggregate":
@@ -126,12 +161,9 @@ def bench_points(bench, busy):
         t = b["cpu_time" if busy else "real_time"] * unit
         its = max(b["iterations"], 1)  # the PCG counter: written after Google Benchmark's own
         setup = b.get("setup_cpu_s", b["setup_s"]) if busy else b["setup_s"]
-        if n in pts:  # repetitions: the least disturbed of each
-            t0, s0, _ = pts[n]
-            pts[n] = (min(t0, t / its), min(s0, setup), int(b["ranks"]))
-        else:
-            pts[n] = (t / its, setup, int(b["ranks"]))
-    return pts
+        reps.setdefault(n, []).append((t / its, setup, int(b["ranks"])))
+    agg = min if how == "min" else median
+    return {n: (agg([r[0] for r in v]), agg([r[1] for r in v]), v[0][2]) for n, v in reps.items()}
 
 
 def grid_levels(dims):
@@ -139,7 +171,7 @@ def grid_levels(dims):
     return 1 + sum(math.ceil(math.log2(n)) for n in dims if n > 1)
 
 
-def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False):
+def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False, how="min"):
     """hypre's cost per PFMG level and face neighbour that a 1-rank run cannot show (comm
     packages, packing, the coarse levels' halos), per PCG iteration and per set-up: from
     bench_fv's pressure solve at 1 and 2 ranks (2 x 1 x 1: one neighbour),
@@ -149,7 +181,7 @@ def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False):
     (BM_PressureSolveBox): hypre alone on that grid at 2 ranks, which has measured far less
     overhead than the same solve shows inside a coupled step (docs/plan.md), so the cubes stay
     the default."""
-    p1, p2 = bench_points(one, busy), bench_points(two, busy)
+    p1, p2 = bench_points(one, busy, how), bench_points(two, busy, how)
     c2 = costs.get("memory_calibration", {}).get("contention_2", 1.0)
     ms = costs["memory_share"]
     f_it = 1 + ms["pressure_solve"] * (c2 - 1)
@@ -177,7 +209,7 @@ def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False):
 
 
 def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None, latency=0.0,
-              overhead_grid="cubes"):
+              overhead_grid="cubes", how="min"):
     steps = report["run"]["steps"] - report["run"].get("first_step", 0)
     sub = report["run"]["dem_substeps"]
     cells = 1
@@ -220,9 +252,24 @@ def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None
                                        "stream_loadavg": stream.get("loadavg", "")}
     if pfmg1 is not None and pfmg2 is not None:
         o = solver_overhead(costs, pfmg1, pfmg2, key != "avg", latency,
-                            report["config"]["domain"]["cells"], overhead_grid == "own")
+                            report["config"]["domain"]["cells"], overhead_grid == "own", how)
         if o:
             costs["pressure_overhead"] = o
+    return costs
+
+
+def calibrate_median(reports, key="avg", coruns=None, stream=None, pfmg1=None, pfmg2=None,
+                     latency=0.0, overhead_grid="cubes"):
+    """The median of repeated calibrations: one calibration from each 1-rank run (with the
+    co-run of the same repeat, when there is one), each unit cost, memory share and overhead the
+    median over the repeats; the benchmarks' repetitions by their median too. One disturbed run
+    then moves no input (a single calibration's inputs move between runs as much as the model's
+    tolerance: docs/plan.md, "Repeatability")."""
+    coruns = coruns or []
+    each = [calibrate(r, key, coruns[i] if i < len(coruns) else None, stream, pfmg1, pfmg2,
+                      latency, overhead_grid, "median") for i, r in enumerate(reports)]
+    costs = median_of(each)
+    costs["repeats"] = len(each)
     return costs
 
 

@@ -124,6 +124,33 @@ def main():
     check("default: the cubes", cc["pressure_overhead"]["per_level_neighbour_iteration_s"],
           o_it - 8e-6 - 3e-6 / 13)
 
+    # --- the median of repeats: the benchmarks' repetitions (1.7, 1.0, 1.3: median 1.3, min
+    # 1.0), and one calibration a 1-rank run, each input the median over them
+    pm = model.bench_points(fv(1, 1e-3, 10e-3), True, "median")[("cube", 16, 16, 16)]
+    check("median repetition, iteration", pm[0], 1.3e-3)
+    check("median repetition, set-up", pm[1], 1.3 * 10e-3)
+    check("min repetition", model.bench_points(fv(1, 1e-3, 10e-3), True)[("cube", 16, 16, 16)][0],
+          1.0e-3)
+    check("median of even count", model.median([4.0, 1.0, 3.0, 2.0]), 2.5)
+    mo = model.median_of([{"a": [1.0, 5.0], "b": "x"}, {"a": [3.0, 2.0], "b": "y"},
+                          {"a": [2.0, 9.0], "b": "z"}])
+    check("median_of list 0", mo["a"][0], 2.0)
+    check("median_of list 1", mo["a"][1], 5.0)
+    check("median_of keeps text", mo["b"] == "x", True)
+    slow = dict(alone, fluid=3 * alone["fluid"])  # one disturbed run of three
+    cm = model.calibrate_median([report(10, alone), report(10, slow), report(10, alone)],
+                                "busy_avg", [report(10, co)] * 3, stream,
+                                fv(1, 1e-3, 10e-3), fv(2, 1e-3 + 13 * o_it, 5e-3 + 13 * o_su),
+                                1e-6)
+    check("median calibration: the disturbed run moves nothing", cm["fluid_per_cell_step"],
+          0.010 / 10000)
+    check("median calibration: memory share", cm["memory_share"]["fluid"], 0.5)
+    check("median calibration: repeats", cm["repeats"], 3)
+    ms = model.median_stream([{"per_rank_Bps": [[4.0, 2.0]], "loadavg": "a"},
+                              {"per_rank_Bps": [[5.0, 1.0]], "loadavg": "b"},
+                              {"per_rank_Bps": [[6.0, 3.0]], "loadavg": "c"}])
+    check("median stream", ms["per_rank_Bps"][0][1], 2.0)
+
     # --- prediction at 1 rank reproduces the calibration; at 2 ranks, by hand
     prof = {"latency_s": 1e-6, "bandwidth_Bps": 1e9, "ranks_per_node": 1, "memory_Bps": 1e9,
             "name": "t", "memory": mem}

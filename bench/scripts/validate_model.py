@@ -8,19 +8,25 @@ For each case (default case2-small and case3-small) it runs, --repeats times eac
 and once: bench_stream on every core (memory contention), bench_fv BM_PressureSolve/{32,64}/0
 and BM_PressureSolveBox on the small cases' grids
 on 1 and 2 ranks (hypre's per-level overhead), `coloc plan CASE --ranks 1,2`. It takes the
-fastest run of each set (the least disturbed; --pick median), calibrates from the 1-rank runs
-ONLY (the 2-rank runs are never fitted), predicts 1 and 2 ranks (--ranks: more) with the
+median of each set (--pick median, the default: one calibration from each 1-rank run and its
+co-run, every input the median over the repeats, bench_stream run --repeats times and
+bench_fv's repetitions by their median too; --pick min: the fastest run of each), calibrates from
+the 1-rank runs ONLY (the 2-rank runs are never fitted), predicts 1 and 2 ranks (--ranks: more) with the
 measured ping-pong and stream profile and prints, per point, the model and measured step time
 and shares (fluid, DEM, coupling, inter-physics, wait) with their errors, PASS/FAIL against
 15 % (a share: 15 % of the measured share, or 1.5 points where that is larger). `uptime` is
-recorded before and after.
+recorded before and after. The runs set run.timer_sync (--no-timer-sync: not): a timed barrier
+before the fluid's halo after the predictor and before the DEM's rebuild vote books a rank's
+wait for the slowest one to `sync`, as the model books imbalance to `wait`, instead of to the
+halo or the pressure solve that follows.
 Writes OUT/validate-CASE.{csv,txt} and OUT/validate-costs-CASE.json.
 
   bench/scripts/validate_model.py                      # runs everything (a few minutes, quiet)
   bench/scripts/validate_model.py --reports DIR        # takes DIR's reports, runs nothing
   --timer busy|wall   busy (thread-CPU; default, for a loaded machine) or wall (a quiet one)
 
-DIR layout (what a run leaves under --runs): stream.json, pfmg-np1.json, pfmg-np2.json,
+DIR layout (what a run leaves under --runs): stream-I.json (or stream.json), pfmg-np1.json,
+pfmg-np2.json,
 CASE/plan/plan.json, CASE/{np1,np1corun,np2}-I/report.json.
 """
 import argparse
@@ -66,9 +72,14 @@ def run_all(a, runs):
     os.makedirs(runs, exist_ok=True)
     bench = a.bench
     ncores = a.stream_ranks or os.cpu_count() or 2
-    print("measuring the memory contention (bench_stream on %d ranks) ..." % ncores, flush=True)
-    sh(mpirun(ncores) + [os.path.join(bench, "bench_stream"), "--json",
-                         os.path.join(runs, "stream.json")], os.path.join(runs, "stream.log"))
+    for i in range(a.repeats):
+        print("measuring the memory contention (bench_stream on %d ranks) %d/%d ..."
+              % (ncores, i + 1, a.repeats), flush=True)
+        sh(mpirun(ncores) + [os.path.join(bench, "bench_stream"), "--json",
+                             os.path.join(runs, "stream-%d.json" % i)],
+           os.path.join(runs, "stream-%d.log" % i))
+    with open(os.path.join(runs, "stream.json"), "w") as f:
+        json.dump(stream_of(runs), f, indent=1)
     fv = os.path.join(bench, "bench_fv")
     if os.path.exists(fv):
         for n in (1, 2):
@@ -85,6 +96,8 @@ def run_all(a, runs):
             "--strategy", "uniform", "--out",
             os.path.join(d, "plan")], os.path.join(d, "plan.log"))
         extra = ["--set", "run.steps=%d" % a.steps] if a.steps else []
+        if a.timer_sync:  # the wait for the slowest rank booked to `sync` (fractions.wait)
+            extra += ["--set", "run.timer_sync=true"]
         for i in range(a.repeats):
             for kind in ["np1", "np1corun"] + ["np%d" % P for P in a.ranks]:
                 out = os.path.join(d, "%s-%d" % (kind, i))
@@ -110,6 +123,15 @@ def run_all(a, runs):
 def load(path):
     with open(path) as f:
         return json.load(f)
+
+
+def stream_of(runs):
+    """bench_stream of the runs: the element-wise median of stream-I.json (one a repeat), or
+    stream.json alone (folders written before the repeats)."""
+    reps = sorted(glob.glob(os.path.join(runs, "stream-*.json")))
+    if not reps:
+        return load(os.path.join(runs, "stream.json"))
+    return model.median_stream([load(p) for p in reps])
 
 
 def steps_of(r):
@@ -172,23 +194,29 @@ def validate_case(a, runs, case, out_dir):
         raise SystemExit("validate_model: missing np1 or np%s reports under %s" %
                          ("/np".join(str(P) for P in a.ranks), d))
     key = "busy_avg" if a.timer == "busy" else "avg"
-    np1 = pick(rep["np1"], a.timer, a.pick)
-    corun = pick(rep["np1corun"], a.timer, a.pick) if rep["np1corun"] else None
-    stream = load(os.path.join(runs, "stream.json"))
+    stream = stream_of(runs)
     pp = load(a.pingpong)
     p1 = os.path.join(runs, "pfmg-np1.json")
     p2 = os.path.join(runs, "pfmg-np2.json")
     have_fv = os.path.exists(p1) and os.path.exists(p2)
-    costs = model.calibrate(np1, key, corun, stream, load(p1) if have_fv else None,
-                            load(p2) if have_fv else None, pp["latency_s"], a.overhead_grid)
+    pf1, pf2 = (load(p1), load(p2)) if have_fv else (None, None)
+    if a.pick == "median":  # one calibration a repeat, each input their median
+        costs = model.calibrate_median(rep["np1"], key, rep["np1corun"], stream, pf1, pf2,
+                                       pp["latency_s"], a.overhead_grid)
+    else:
+        np1 = pick(rep["np1"], a.timer, a.pick)
+        corun = pick(rep["np1corun"], a.timer, a.pick) if rep["np1corun"] else None
+        costs = model.calibrate(np1, key, corun, stream, pf1, pf2, pp["latency_s"],
+                                a.overhead_grid)
     src = costs["source"]
     if os.path.isabs(src) and "/bench/cases/" in src:  # reports of runs made from a checkout
         costs["source"] = "bench/cases/" + src.split("/bench/cases/")[-1]
     prof = model.profile(a.pingpong, stream)
     plan = load(os.path.join(d, "plan", "plan.json"))
     rows, lines = [], []
-    lines.append("MODEL VALIDATION %s, timer %s, %d repeat(s), %s run of each, calibrated on 1 rank"
-                 % (name, a.timer, len(rep["np1"]), a.pick))
+    lines.append("MODEL VALIDATION %s, timer %s, %d repeat(s), %s of each, calibrated on 1 rank%s"
+                 % (name, a.timer, len(rep["np1"]), a.pick,
+                    "; run.timer_sync" if a.timer_sync else ""))
     lines.append("load during the runs: %s" % a.load_note)
     lines.append("memory: contention c(2) = %.3f (bench_stream, %.0f MiB a rank), memory-bound "
                  "shares %s" % (model.contention(prof["memory"], 2), prof["memory"]["size_mib"],
@@ -252,7 +280,7 @@ def main():
     ap.add_argument("--coloc", default=os.path.join(ROOT, "build/coloc"))
     ap.add_argument("--bench", default=os.path.join(ROOT, "build/bench"))
     ap.add_argument("--pingpong", default=os.path.join(ROOT, "bench/results/model/pingpong.json"))
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--ranks", default="2", help="rank counts to predict, e.g. 2,4,8,16 (1 is "
                     "always run: the calibration)")
     ap.add_argument("--steps", type=int, default=0, help="override run.steps (0: the case's)")
@@ -260,8 +288,13 @@ def main():
     ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
     ap.add_argument("--overhead-grid", choices=["cubes", "own"], default="cubes",
                     help="hypre's per-level overhead from the cubes or the case's own grid")
-    ap.add_argument("--pick", choices=["min", "median"], default="min",
-                    help="the fastest run of each set (least disturbed) or the median")
+    ap.add_argument("--pick", choices=["min", "median"], default="median",
+                    help="median: one calibration a 1-rank repeat and the median of each input "
+                    "(stream, co-run shares, hypre's overhead, unit costs), the median 2-rank "
+                    "run measured; min: the fastest run of each set (least disturbed)")
+    ap.add_argument("--no-timer-sync", dest="timer_sync", action="store_false",
+                    help="run without run.timer_sync (the wait for the slowest rank is then "
+                    "booked to the collective phase that follows it)")
     ap.add_argument("--runs", default="/tmp/coloc-validate")
     ap.add_argument("--reports", help="take the reports under this folder; run nothing")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench/results/model"))
