@@ -3,7 +3,7 @@
 
     bench/peers/openfoam/openfoam_bench.py channel [--steps 20] [--rounds 3] [--dt 0.015]
     bench/peers/openfoam/openfoam_bench.py fbed [--settle-steps 230] [--coloc-steps 10]
-        [--foam-steps 3] [--rounds 3] [--particles N]
+        [--foam-steps 4] [--foam-dt S] [--rounds 3] [--particles N]
 
 channel: bench/cases/fluid-channel.json against icoFoam (GAMG for the pressure). The script
 writes the OpenFOAM case from the coloc case (blockMeshDict from `domain`, the boundary
@@ -575,11 +575,12 @@ def fbed(args):
     fl_dt, pa_dt = cfg["fluid"]["dt"], cfg["particles"]["dt"]
     sub = round(fl_dt / pa_dt)
     d = os.path.join(HERE, "fbed")
-    # DPMFoam's time step is the particles' (see README: its collision sub-cycling follows the
-    # fastest particle, one sub-cycle for a bed at rest); one step more at each end: the first
-    # injects, the last writes the positions
+    # DPMFoam's time step: coloc's fluid step by default (DPMFoam then sub-cycles its collisions
+    # by its own estimate from the fastest particle, 16 sub-cycles of 2.5e-5 s here); one step
+    # more at each end: the first injects, the last writes the positions
+    foam_dt = args.foam_dt or fl_dt
     steps = args.foam_steps + 2
-    write_fbed(args.case, cfg, d, pa_dt, steps, radius, args.alpha, args.collision_steps,
+    write_fbed(args.case, cfg, d, foam_dt, steps, radius, args.alpha, args.collision_steps,
                args.drag)
     foam = os.path.join(work, "foam")
     if args.remesh or not os.path.exists(os.path.join(foam, "constant/polyMesh/owner")):
@@ -666,6 +667,7 @@ def fbed(args):
     notes = (f"{name}: {cfg['domain']['cells']} cells, {n_all:,} particles from coloc's settled "
              f"bed ({args.settle_steps} steps; coordination of the injected positions "
              f"{cn0:.2f}), fluid dt {fl_dt:g} s, coloc {sub} DEM sub-steps a fluid step; "
+             f"DPMFoam deltaT {foam_dt:g} s, its own collision sub-cycles; "
              f"DPMFoam {args.drag}, pairSpringSliderDashpot (alpha {args.alpha:g}, b 1.5, "
              f"collisionResolutionSteps {args.collision_steps}), {args.foam_steps} timed steps "
              f"after the injection step; coloc {args.coloc_steps} steps restarted from the "
@@ -673,7 +675,7 @@ def fbed(args):
              f"sub-steps). Both `taskset -c {args.cpu}`.")
     by = {(r["code"], r["round"]): r for r in rows}
     more = ["", "| round | DPMFoam sub-steps | DPMFoam contacts/particle | coloc contacts/particle "
-                f"| DPMFoam s/step (of {pa_dt:g} s) | coloc s/step (of {fl_dt:g} s) |",
+                f"| DPMFoam s/step (of {foam_dt:g} s) | coloc s/step (of {fl_dt:g} s) |",
             "|---|---|---|---|---|---|"]
     for k in sorted({r["round"] for r in rows}):
         a, b = by.get(("DPMFoam", k)), by.get(("coloc", k))
@@ -709,8 +711,9 @@ def main():
     f.add_argument("--case", default=os.path.join(ROOT, "bench/cases/fbed-100k.json"))
     f.add_argument("--settle-steps", type=int, default=230)
     f.add_argument("--coloc-steps", type=int, default=10)
-    f.add_argument("--foam-steps", type=int, default=20,
-                   help="timed DPMFoam steps (of the particle dt) after the first")
+    f.add_argument("--foam-steps", type=int, default=4, help="timed DPMFoam steps after the first")
+    f.add_argument("--foam-dt", type=float, default=0.0,
+                   help="DPMFoam's deltaT (default: the case's fluid.dt)")
     f.add_argument("--particles", type=int, default=0)
     f.add_argument("--alpha", type=float, default=0.075)
     f.add_argument("--collision-steps", type=int, default=12)
