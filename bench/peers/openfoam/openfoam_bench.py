@@ -1,0 +1,729 @@
+#!/usr/bin/python3
+"""coloc against OpenFOAM (Debian `openfoam` v1912), one core each, back to back (issue 16).
+
+    bench/peers/openfoam/openfoam_bench.py channel [--steps 20] [--rounds 3] [--dt 0.015]
+    bench/peers/openfoam/openfoam_bench.py fbed [--settle-steps 230] [--coloc-steps 10]
+        [--foam-steps 4] [--foam-dt S] [--rounds 3] [--particles N]
+
+channel: bench/cases/fluid-channel.json against icoFoam (GAMG for the pressure). The script
+writes the OpenFOAM case from the coloc case (blockMeshDict from `domain`, the boundary
+conditions from `fluid.boundary`, nu, the pressure tolerance from `fluid.pressure.tol`) into
+bench/peers/openfoam/channel/ (text, committed) and runs blockMesh once in --work. Each round runs
+coloc for 1 step and for 1 + --steps steps (the difference is the cost of --steps warm steps, the
+first step's multigrid set-up and the start-up excluded), then icoFoam for 1 + --steps steps
+(its own ExecutionTime / ClockTime lines, the first step excluded), both under
+`taskset -c --cpu`, with the same fixed dt. Pressure iterations a step: coloc's
+pressure.iterations_avg, icoFoam's GAMG "No Iterations" summed over the PISO correctors.
+
+fbed: bench/cases/fbed-100k.json against DPMFoam. coloc settles the layered bed (the script runs
+bench/scripts/contact_bench.py --settle-only once: a checkpoint), the particle positions are read
+from the checkpoint and given to DPMFoam as a manualInjection at t = 0 (so both start from the
+same packed bed), then each round runs coloc restarted from the checkpoint for --coloc-steps
+steps and DPMFoam for 1 + --foam-steps steps (the first, with the injection, excluded). The
+measure is seconds per particle per DEM sub-step: the whole coupled step (fluid + particles +
+coupling) divided by particles x sub-steps (coloc: particles.dt / fluid.dt sub-steps; DPMFoam:
+the "move-collide subCycles" it prints, at least 1). Contacts per particle: coloc's
+contacts_per_particle (series.csv), DPMFoam's from the positions it writes at the end (pairs
+closer than the sum of the radii) and the same count on the injected positions.
+
+Outputs: bench/results/openfoam/{channel,fbed}.csv (one row per run, with the load average) and
+{channel,fbed}.md (medians, ratios per round). Work folders (meshes, logs, run outputs) under
+--work (default out/openfoam/, not committed). Not part of CTest: OpenFOAM is not a dependency.
+"""
+import argparse
+import csv
+import json
+import os
+import re
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
+PY = "/usr/bin/python3"
+
+HEADER = """/*--------------------------------*- C++ -*----------------------------------*\\
+  Written by bench/peers/openfoam/openfoam_bench.py from {case}
+\\*---------------------------------------------------------------------------*/
+FoamFile
+{{
+    version     2.0;
+    format      ascii;
+    class       {cls};
+    location    "{loc}";
+    object      {obj};
+}}
+"""
+
+
+def load_jsonc(path):
+    """coloc case files are JSON with // comments (never inside strings in bench/cases)."""
+    text = open(path).read()
+    text = re.sub(r"//[^\n]*", "", text)
+    return json.loads(text)
+
+
+def foam_file(case_dir, rel, body, case, cls="dictionary"):
+    path = os.path.join(case_dir, rel)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    loc, obj = os.path.split(rel)
+    with open(path, "w") as f:
+        f.write(HEADER.format(case=os.path.relpath(case, ROOT), cls=cls, loc=loc, obj=obj))
+        f.write(body.strip("\n") + "\n")
+
+
+_FOAM_ENV = None
+
+
+def foam_env():
+    """The environment after sourcing OpenFOAM's bashrc (its binaries need WM_PROJECT_DIR...)."""
+    global _FOAM_ENV
+    if _FOAM_ENV is None:
+        rc = os.environ.get("FOAM_BASHRC", "/usr/share/openfoam/etc/bashrc")
+        out = subprocess.run(["bash", "-c", f"source {rc} >/dev/null 2>&1; env -0"],
+                             capture_output=True, check=True).stdout.decode()
+        _FOAM_ENV = dict(kv.split("=", 1) for kv in out.split("\0") if "=" in kv)
+    return _FOAM_ENV
+
+
+def uptime():
+    return open("/proc/loadavg").read().split()[0]
+
+
+def timed(cmd, log, cwd=None, env=None):
+    """Run cmd with stdout/stderr to log; return (wall s, child CPU s) of this run alone."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    with open(log, "w") as f:
+        rc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, cwd=cwd, env=env).returncode
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if rc:
+        sys.exit(f"openfoam_bench: {' '.join(cmd)} failed ({rc}); see {log}")
+    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+
+
+def box_mesh(origin, length, cells, patches):
+    """blockMeshDict of one box; patches: {face: (name, type)} for xlo..zhi."""
+    x0, y0, z0 = origin
+    x1, y1, z1 = (o + l for o, l in zip(origin, length))
+    faces = {"xlo": "(0 4 7 3)", "xhi": "(1 2 6 5)", "ylo": "(0 1 5 4)", "yhi": "(3 7 6 2)",
+             "zlo": "(0 3 2 1)", "zhi": "(4 5 6 7)"}
+    by = {}
+    for face, (name, typ) in patches.items():
+        by.setdefault((name, typ), []).append(faces[face])
+    bnd = "\n".join(f"    {n}\n    {{\n        type {t};\n        faces\n        (\n" +
+                    "\n".join(f"            {fc}" for fc in fcs) + "\n        );\n    }"
+                    for (n, t), fcs in by.items())
+    return f"""
+scale 1;
+vertices
+(
+    ({x0} {y0} {z0}) ({x1} {y0} {z0}) ({x1} {y1} {z0}) ({x0} {y1} {z0})
+    ({x0} {y0} {z1}) ({x1} {y0} {z1}) ({x1} {y1} {z1}) ({x0} {y1} {z1})
+);
+blocks ( hex (0 1 2 3 4 5 6 7) ({cells[0]} {cells[1]} {cells[2]}) simpleGrading (1 1 1) );
+edges ();
+boundary
+(
+{bnd}
+);
+"""
+
+
+def control_dict(app, dt, steps, write_at_end=False):
+    end = dt * steps
+    wi = f"{steps}" if write_at_end else f"{10 * steps}"
+    return f"""
+application     {app};
+startFrom       startTime;
+startTime       0;
+stopAt          endTime;
+endTime         {end:.10g};
+deltaT          {dt:.10g};
+writeControl    timeStep;
+writeInterval   {wi};
+purgeWrite      0;
+writeFormat     ascii;
+writePrecision  10;
+writeCompression off;
+timeFormat      general;
+timePrecision   10;
+runTimeModifiable false;
+"""
+
+
+# ----------------------------------------------------------------------------------------------
+# channel: icoFoam
+
+
+def write_channel(case, cfg, dt, steps, n_correctors, d):
+    fl, dom = cfg["fluid"], cfg["domain"]
+    tol = fl["pressure"]["tol"]
+    names = {}
+    for face, b in fl["boundary"].items():
+        names[face] = {"inlet": ("inlet", "patch"), "outlet": ("outlet", "patch"),
+                       "wall": ("walls", "wall")}[b["type"]]
+    inlet = next(b for b in fl["boundary"].values() if b["type"] == "inlet")["velocity"]
+    p_out = next(b for b in fl["boundary"].values() if b["type"] == "outlet").get("pressure", 0)
+    u0 = fl.get("initial_velocity", [0, 0, 0])
+    vec = lambda v: "(" + " ".join(f"{x:g}" for x in v) + ")"
+    foam_file(d, "system/blockMeshDict",
+              box_mesh(dom.get("origin", [0, 0, 0]), dom["length"], dom["cells"], names), case)
+    foam_file(d, "system/controlDict", control_dict("icoFoam", dt, steps), case)
+    foam_file(d, "system/fvSchemes", """
+ddtSchemes      { default Euler; }
+gradSchemes     { default Gauss linear; }
+divSchemes      { default none; div(phi,U) Gauss vanLeerV; }  // coloc: TVD, van Leer limiter
+laplacianSchemes { default Gauss linear corrected; }
+interpolationSchemes { default linear; }
+snGradSchemes   { default corrected; }
+""", case)
+    foam_file(d, "system/fvSolution", f"""
+// p: coloc's fluid.pressure.tol = {tol:g} as an absolute tolerance on OpenFOAM's normalised
+// residual (sum|b - A x| / normFactor, itself scaled by the size of A x and b), relTol 0 on
+// every corrector: both stop at a residual {tol:g} of the scale of the equation.
+solvers
+{{
+    p     {{ solver GAMG; tolerance {tol:g}; relTol 0; smoother GaussSeidel; }}
+    pFinal {{ $p; }}
+    U     {{ solver smoothSolver; smoother symGaussSeidel; tolerance 1e-05; relTol 0; }}
+}}
+PISO
+{{
+    nCorrectors     {n_correctors};
+    nNonOrthogonalCorrectors 0;
+    pRefCell        0;
+    pRefValue       0;
+}}
+""", case)
+    foam_file(d, "constant/transportProperties", f"nu [0 2 -1 0 0 0 0] {fl['nu']:g};", case)
+    bc_u = {"inlet": f"type fixedValue; value uniform {vec(inlet)};",
+            "outlet": "type zeroGradient;", "walls": "type noSlip;"}
+    bc_p = {"inlet": "type zeroGradient;", "outlet": f"type fixedValue; value uniform {p_out:g};",
+            "walls": "type zeroGradient;"}
+    pats = sorted({n for n, _ in names.values()})
+    foam_file(d, "0/U", "dimensions [0 1 -1 0 0 0 0];\n"
+              f"internalField uniform {vec(u0)};\nboundaryField\n{{\n" +
+              "".join(f"    {p} {{ {bc_u[p]} }}\n" for p in pats) + "}", case, "volVectorField")
+    foam_file(d, "0/p", "dimensions [0 2 -2 0 0 0 0];\ninternalField uniform 0;\n"
+              "boundaryField\n{\n" + "".join(f"    {p} {{ {bc_p[p]} }}\n" for p in pats) + "}",
+              case, "volScalarField")
+
+
+def foam_steps(log):
+    """Per-step (cpu, wall) increments from ExecutionTime/ClockTime lines, and the log text."""
+    text = open(log).read()
+    ex = [(float(a), float(b)) for a, b in
+          re.findall(r"ExecutionTime = ([0-9.eE+-]+) s\s+ClockTime = ([0-9.eE+-]+) s", text)]
+    return ex, text
+
+
+def per_step_foam(log, skip=1, tail=0):
+    """Per-step CPU and wall s over the steps after the first `skip` and before the last `tail`
+    (ExecutionTime lines: one after each time step, the first also holding the start-up, a
+    step that writes also holding the writing)."""
+    ex, text = foam_steps(log)
+    last = len(ex) - 1 - tail
+    n = last - (skip - 1)
+    cpu = (ex[last][0] - ex[skip - 1][0]) / n
+    wall = (ex[last][1] - ex[skip - 1][1]) / n
+    return cpu, wall, n, text
+
+
+def channel(args):
+    cfg = load_jsonc(args.case)
+    d = os.path.join(HERE, "channel")
+    work = os.path.join(args.work, "channel")
+    write_channel(args.case, cfg, args.dt, args.steps + 1, args.n_correctors, d)
+    foam = os.path.join(work, "foam")
+    if args.remesh or not os.path.exists(os.path.join(foam, "constant/polyMesh/owner")):
+        shutil.rmtree(foam, ignore_errors=True)
+        shutil.copytree(d, foam, ignore=shutil.ignore_patterns("README*"))
+        timed(["blockMesh"], os.path.join(work, "blockMesh.log"), cwd=foam, env=foam_env())
+    else:  # keep the mesh, refresh the dictionaries
+        for sub in ("system", "constant", "0"):
+            for fn in os.listdir(os.path.join(d, sub)):
+                shutil.copy(os.path.join(d, sub, fn), os.path.join(foam, sub, fn))
+    ts = ["taskset", "-c", str(args.cpu)]
+    sets = ["--set", "fluid.adaptive_dt=false", "--set", f"fluid.dt={args.dt}",
+            "--set", "run.progress_interval_s=0", "--set", "output.snapshot=false"]
+    rows = []
+    for rnd in range(args.rounds):
+        for who in args.order.split(","):
+            load = uptime()
+            if who == "coloc":
+                res = {}
+                for n in (1, args.steps + 1):
+                    out = os.path.join(work, f"coloc-r{rnd}-n{n}")
+                    wall, cpu = timed(ts + [args.coloc, "run", args.case, "--quiet", "--out", out,
+                                            "--set", f"run.steps={n}"] + sets,
+                                      out + ".log")
+                    rep = json.load(open(os.path.join(out, "report.json")))
+                    res[n] = (wall, cpu, rep)
+                (w1, c1, rep1), (wn, cn, rep) = res[1], res[args.steps + 1]
+                its1 = rep1["pressure"]["iterations_avg"]  # the first step's
+                row = {"code": "coloc", "round": rnd, "steps": args.steps,
+                       "wall_s_per_step": (wn - w1) / args.steps,
+                       "cpu_s_per_step": (cn - c1) / args.steps,
+                       "p_iters_per_step": (rep["pressure"]["iterations_avg"] * (args.steps + 1)
+                                            - its1) / args.steps,
+                       "p_iters_first_step": its1,
+                       "p_solves_per_step": 1}
+            else:
+                for t in os.listdir(foam):  # remove earlier time folders
+                    if re.fullmatch(r"[0-9.e-]+", t) and t != "0":
+                        shutil.rmtree(os.path.join(foam, t))
+                log = os.path.join(work, f"icoFoam-r{rnd}.log")
+                timed(ts + ["icoFoam"], log, cwd=foam, env=foam_env())
+                cpu, wall, n, text = per_step_foam(log)
+                its = [int(x) for x in re.findall(r"Solving for p,.*No Iterations (\d+)", text)]
+                nc = args.n_correctors
+                row = {"code": "icoFoam", "round": rnd, "steps": n, "wall_s_per_step": wall,
+                       "cpu_s_per_step": cpu, "p_iters_per_step": sum(its[nc:]) / n,
+                       "p_iters_first_step": sum(its[:nc]),
+                       "p_solves_per_step": nc}
+            row["load1_before"] = load
+            row["load1_after"] = uptime()
+            print("openfoam_bench:", row, flush=True)
+            rows.append(row)
+    write_table(args, "channel" + args.tag, rows, "icoFoam", "coloc", "s per step",
+                "wall_s_per_step",
+                "cpu_s_per_step", extra=channel_notes(args, cfg))
+
+
+def channel_notes(args, cfg):
+    c = cfg["domain"]["cells"]
+    return (f"Grid {c[0]} x {c[1]} x {c[2]} = {c[0] * c[1] * c[2]:,} cells, fixed dt {args.dt} s "
+            f"for both, {args.steps} timed steps after a first one; pressure tolerance "
+            f"{cfg['fluid']['pressure']['tol']:g} (coloc: L2 residual of the flux scale; "
+            f"OpenFOAM: normalised L1 residual, relTol 0); icoFoam PISO with "
+            f"{args.n_correctors} corrector(s), GAMG (GaussSeidel), Euler, vanLeerV; coloc "
+            f"as in the case file (PCG + PFMG weighted Jacobi, AB2, TVD van Leer). "
+            f"Both `taskset -c {args.cpu}`.")
+
+
+def write_table(args, name, rows, peer, ours, unit, wkey, ckey, extra="", more=()):
+    os.makedirs(args.out, exist_ok=True)
+    keys = []
+    for r in rows:
+        keys += [k for k in r if k not in keys]
+    with open(os.path.join(args.out, f"{name}.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    rounds = sorted({r["round"] for r in rows})
+    by = {(r["code"], r["round"]): r for r in rows}
+    lines = [f"# coloc against OpenFOAM: {name}", "", extra, "",
+             f"| round | {peer} wall | {ours} wall | wall ratio | {peer} CPU | {ours} CPU | "
+             f"CPU ratio | {peer} p its/step | {ours} p its/step | load 1 min |"
+             if name.startswith("channel") else
+             f"| round | {peer} wall | {ours} wall | wall ratio | {peer} CPU | {ours} CPU | "
+             f"CPU ratio | load 1 min |",
+             "|---|---|---|---|---|---|---|---|---|---|" if name.startswith("channel") else
+             "|---|---|---|---|---|---|---|---|"]
+    rw, rc = [], []
+    for k in rounds:
+        p, o = by.get((peer, k)), by.get((ours, k))
+        if not p or not o:
+            continue
+        rw.append(p[wkey] / o[wkey])
+        rc.append(p[ckey] / o[ckey])
+        cells = [str(k), f"{p[wkey]:.4g}", f"{o[wkey]:.4g}", f"{rw[-1]:.2f}x", f"{p[ckey]:.4g}",
+                 f"{o[ckey]:.4g}", f"{rc[-1]:.2f}x"]
+        if name.startswith("channel"):
+            cells += [f"{p['p_iters_per_step']:.2f}", f"{o['p_iters_per_step']:.2f}"]
+        cells.append(f"{p['load1_before']}/{o['load1_before']}")
+        lines.append("| " + " | ".join(cells) + " |")
+    if rw:
+        lines += ["", f"Ratio {peer} / {ours} ({unit}): wall median {statistics.median(rw):.2f}x "
+                      f"(min {min(rw):.2f}, max {max(rw):.2f}); CPU median "
+                      f"{statistics.median(rc):.2f}x (min {min(rc):.2f}, max {max(rc):.2f})."]
+    lines += list(more)
+    with open(os.path.join(args.out, f"{name}.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+# ----------------------------------------------------------------------------------------------
+# fbed: DPMFoam
+
+
+def settled_positions(h5):
+    import h5py
+    import numpy as np
+    with h5py.File(h5, "r") as f:
+        found = {}
+
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                found[name] = obj
+        f.visititems(visit)
+        keys = sorted(found)
+        pos = [k for k in keys if re.search(r"(^|/)(pos|position|positions|x)$", k)]
+        rad = [k for k in keys if re.search(r"(^|/)(radius|r|radii)$", k)]
+        if not pos:
+            sys.exit(f"openfoam_bench: no positions in {h5}: {keys}")
+        p = np.asarray(found[pos[0]][...], dtype=float).reshape(-1, 3)
+        r = np.asarray(found[rad[0]][...], dtype=float).ravel() if rad else None
+    return p, r
+
+
+def contacts_per_particle(p, radius):
+    from scipy.spatial import cKDTree
+    pairs = cKDTree(p).query_pairs(2 * radius, output_type="ndarray")
+    return 2.0 * len(pairs) / len(p) if len(p) else float("nan")
+
+
+def write_fbed(case, cfg, d, dt, steps, radius, alpha, collision_steps, drag):
+    dom, fl, pa = cfg["domain"], cfg["fluid"], cfg["particles"]
+    mat = pa["materials"][0]
+    names = {}
+    for face, b in fl["boundary"].items():
+        names[face] = {"inlet": ("bottom", "patch"), "outlet": ("top", "patch"),
+                       "wall": ("walls", "wall")}[b["type"]]
+    inlet = next(b for b in fl["boundary"].values() if b["type"] == "inlet")["velocity"]
+    vec = lambda v: "(" + " ".join(f"{x:g}" for x in v) + ")"
+    foam_file(d, "system/blockMeshDict",
+              box_mesh(dom.get("origin", [0, 0, 0]), dom["length"], dom["cells"], names), case)
+    foam_file(d, "system/controlDict", control_dict("DPMFoam", dt, steps, write_at_end=True),
+              case)
+    foam_file(d, "system/fvSchemes", """
+ddtSchemes      { default Euler; }
+gradSchemes     { default Gauss linear; }
+divSchemes
+{
+    default         none;
+    div(alphaPhi.air,U.air) Gauss vanLeerV;
+    div(((alpha.air*nuEff.air)*dev2(T(grad(U.air))))) Gauss linear;
+}
+laplacianSchemes { default Gauss linear corrected; }
+interpolationSchemes { default linear; }
+snGradSchemes   { default corrected; }
+""", case)
+    tol = fl.get("pressure", {}).get("tol", 1e-8)
+    foam_file(d, "system/fvSolution", f"""
+solvers
+{{
+    p      {{ solver GAMG; tolerance {tol:g}; relTol 0; smoother GaussSeidel; }}
+    pFinal {{ $p; }}
+    "(U.air|U.airFinal)" {{ solver smoothSolver; smoother symGaussSeidel; tolerance 1e-05;
+                           relTol 0; }}
+    "kinematicCloud:theta.*" {{ solver GAMG; tolerance 1e-06; relTol 0;
+                               smoother GaussSeidel; }}
+}}
+PIMPLE
+{{
+    nOuterCorrectors 1;
+    nCorrectors     1;   // coloc: one pressure solve a step
+    momentumPredictor yes;
+    nNonOrthogonalCorrectors 0;
+    pRefCell        0;
+    pRefValue       0;
+}}
+relaxationFactors {{}}
+""", case)
+    foam_file(d, "constant/transportProperties",
+              f"continuousPhase air;\nrho.air {fl['rho']:g};\ntransportModel Newtonian;\n"
+              f"nu {fl['nu']:g};", case)
+    foam_file(d, "constant/turbulenceProperties.air", "simulationType laminar;", case)
+    foam_file(d, "constant/g", f"dimensions [0 1 -2 0 0 0 0];\nvalue {vec(cfg['gravity'])};",
+              case, "uniformDimensionedVectorField")
+    pats = sorted({n for n, _ in names.values()})
+    bc_u = {"bottom": f"type interstitialInletVelocity; inletVelocity uniform {vec(inlet)}; "
+                      f"value uniform {vec(inlet)}; phi phi.air; alpha alpha.air;",
+            "top": "type pressureInletOutletVelocity; phi phi.air; inletValue uniform (0 0 0); "
+                   "value uniform (0 0 0);",
+            "walls": "type noSlip;"}
+    bc_p = {"bottom": "type fixedFluxPressure; value uniform 0;",
+            "top": "type fixedValue; value uniform 0;",
+            "walls": "type fixedFluxPressure; value uniform 0;"}
+    foam_file(d, "0/U.air", "dimensions [0 1 -1 0 0 0 0];\n"
+              f"internalField uniform {vec(fl.get('initial_velocity', [0, 0, 0]))};\n"
+              "boundaryField\n{\n" + "".join(f"    {p} {{ {bc_u[p]} }}\n" for p in pats) + "}",
+              case, "volVectorField")
+    foam_file(d, "0/p", "dimensions [0 2 -2 0 0 0 0];\ninternalField uniform 0;\n"
+              "boundaryField\n{\n" + "".join(f"    {p} {{ {bc_p[p]} }}\n" for p in pats) + "}",
+              case, "volScalarField")
+    E, nu_p, mu = mat["young"], mat["poisson"], mat["friction"]
+    walls = "\n".join(f"            {p} {{ type rebound; e {mat['restitution']:g}; mu {mu:g}; }}"
+                      for p in pats)
+    foam_file(d, "constant/kinematicCloudProperties", f"""
+solution
+{{
+    active          true;
+    coupled         true;
+    transient       yes;
+    cellValueSourceCorrection off;
+    interpolationSchemes {{ rho.air cell; U.air cellPoint; mu.air cell; }}
+    integrationSchemes {{ U Euler; }}
+    sourceTerms {{ schemes {{ U semiImplicit 1; }} }}
+}}
+constantProperties
+{{
+    parcelTypeId    1;
+    rhoMin          1e-15;
+    minParcelMass   1e-15;
+    rho0            {mat['density']:g};
+    youngsModulus   {E:g};
+    poissonsRatio   {nu_p:g};
+    constantVolume  false;
+    alphaMax        0.99;
+}}
+subModels
+{{
+    particleForces
+    {{
+        {drag} {{ alphac alpha.air; }}   // coloc: Di Felice (the closest: a power of eps on a
+                                         // single-sphere drag, no Ergun branch)
+        gravity;
+    }}
+    injectionModels
+    {{
+        settled
+        {{
+            type            manualInjection;
+            massTotal       0;
+            parcelBasisType fixed;
+            nParticle       1;
+            SOI             0;
+            positionsFile   "kinematicCloudPositions";   // coloc's settled bed
+            U0              (0 0 0);
+            sizeDistribution
+            {{
+                type fixedValue;
+                fixedValueDistribution {{ value {2 * radius:g}; }}
+            }}
+        }}
+    }}
+    dispersionModel none;
+    patchInteractionModel standardWallInteraction;   // walls: pairCollision's wall model
+    standardWallInteractionCoeffs {{ type rebound; e {mat['restitution']:g}; mu {mu:g}; }}
+    localInteractionCoeffs {{ patches ( {walls} ); }}
+    heatTransferModel none;
+    surfaceFilmModel none;
+    stochasticCollisionModel none;
+    radiation off;
+    collisionModel  pairCollision;
+    pairCollisionCoeffs
+    {{
+        maxInteractionDistance  {2 * radius:g};
+        writeReferredParticleCloud no;
+        pairModel pairSpringSliderDashpot;
+        pairSpringSliderDashpotCoeffs
+        {{
+            useEquivalentSize   no;
+            alpha               {alpha:g};   // damping: restitution ~{mat['restitution']:g}
+            b                   1.5;        // Hertz
+            mu                  {mu:g};
+            cohesionEnergyDensity 0;
+            collisionResolutionSteps {collision_steps};
+        }}
+        wallModel wallSpringSliderDashpot;
+        wallSpringSliderDashpotCoeffs
+        {{
+            useEquivalentSize   no;
+            collisionResolutionSteps {collision_steps};
+            youngsModulus       {E:g};
+            poissonsRatio       {nu_p:g};
+            alpha               {alpha:g};
+            b                   1.5;
+            mu                  {mu:g};
+            cohesionEnergyDensity 0;
+        }}
+        U U.air;
+    }}
+}}
+cloudFunctions {{}}
+""", case)
+
+
+def foam_positions(case_dir, time_name):
+    """Cartesian positions DPMFoam wrote at time_name (the legacy `positions` file)."""
+    import numpy as np
+    path = os.path.join(case_dir, time_name, "lagrangian", "kinematicCloud", "positions")
+    text = open(path).read()
+    pts = re.findall(r"\(\s*([-0-9.eE+]+)\s+([-0-9.eE+]+)\s+([-0-9.eE+]+)\s*\)", text)
+    return np.array(pts, dtype=float)
+
+
+def fbed(args):
+    import numpy as np
+    cfg = load_jsonc(args.case)
+    name = cfg["name"]
+    work = os.path.join(args.work, "fbed")
+    os.makedirs(work, exist_ok=True)
+    ckdir = os.path.join(work, "contact")
+    ck = os.path.join(ckdir, "settled.h5")
+    if not os.path.exists(ck):
+        subprocess.run([PY, os.path.join(ROOT, "bench/scripts/contact_bench.py"), args.case,
+                        "--settle-steps", str(args.settle_steps), "--settle-only",
+                        "--coloc", args.coloc, "--work", ckdir,
+                        "--launcher", f"taskset -c {args.cpu}",
+                        "--out", os.path.join(work, "contact-out")], check=True)
+    p, r = settled_positions(ck)
+    radius = float(r[0]) if r is not None else cfg["particles"]["sources"][0]["radius"]
+    n_all = len(p)
+    if args.particles and args.particles < n_all:
+        p = p[np.argsort(p[:, 2], kind="stable")[:args.particles]]  # the lowest: a packed bed
+    cn0 = contacts_per_particle(p, radius)
+    fl_dt, pa_dt = cfg["fluid"]["dt"], cfg["particles"]["dt"]
+    sub = round(fl_dt / pa_dt)
+    d = os.path.join(HERE, "fbed")
+    # DPMFoam's time step: coloc's fluid step by default (DPMFoam then sub-cycles its collisions
+    # by its own estimate from the fastest particle, 16 sub-cycles of 2.5e-5 s here); one step
+    # more at each end: the first injects, the last writes the positions
+    foam_dt = args.foam_dt or fl_dt
+    steps = args.foam_steps + 2
+    write_fbed(args.case, cfg, d, foam_dt, steps, radius, args.alpha, args.collision_steps,
+               args.drag)
+    foam = os.path.join(work, "foam")
+    if args.remesh or not os.path.exists(os.path.join(foam, "constant/polyMesh/owner")):
+        shutil.rmtree(foam, ignore_errors=True)
+        shutil.copytree(d, foam, ignore=shutil.ignore_patterns("README*"))
+        timed(["blockMesh"], os.path.join(work, "blockMesh.log"), cwd=foam, env=foam_env())
+    for sub_d in ("system", "constant", "0"):
+        for fn in os.listdir(os.path.join(d, sub_d)):
+            shutil.copy(os.path.join(d, sub_d, fn), os.path.join(foam, sub_d, fn))
+    with open(os.path.join(foam, "constant", "kinematicCloudPositions"), "w") as f:
+        f.write(HEADER.format(case=os.path.relpath(ck, ROOT), cls="vectorField", loc="constant",
+                              obj="kinematicCloudPositions"))
+        f.write(f"{len(p)}\n(\n")
+        f.writelines(f"({x:.9g} {y:.9g} {z:.9g})\n" for x, y, z in p)
+        f.write(")\n")
+    ts = ["taskset", "-c", str(args.cpu)]
+    total = args.settle_steps + args.coloc_steps
+    sets = ["--set", f"run.steps={total}", "--set", "run.progress_interval_s=0",
+            "--set", f"output.diagnostics_interval={max(1, args.coloc_steps // 5)}"]
+    if args.particles and args.particles < n_all:
+        sys.exit("openfoam_bench: --particles below the case's count: coloc would need a case "
+                 "with that many particles (not written by this script)")
+    rows = []
+    for rnd in range(args.rounds):
+        for who in args.order.split(","):
+            load = uptime()
+            if who == "coloc":
+                out = os.path.join(work, f"coloc-r{rnd}")
+                wall, cpu = timed(ts + [args.coloc, "run", args.case, "--quiet", "--out", out,
+                                        "--restart", ck] + sets, out + ".log")
+                rep = json.load(open(os.path.join(out, "report.json")))
+                steps = rep["run"]["steps"] - rep["run"].get("first_step", 0)
+                # thread-CPU time of the step's phases (not the set-up with the checkpoint read,
+                # not the diagnostics booked to output)
+                busy = sum(v.get("busy_avg", 0.0) for k, v in rep["timers"].items()
+                           if isinstance(v, dict) and k not in ("setup", "output"))
+                cns = []
+                with open(os.path.join(out, "series.csv")) as f:
+                    for row_ in csv.DictReader(f):
+                        if row_.get("contacts_per_particle"):
+                            cns.append(float(row_["contacts_per_particle"]))
+                n = rep["particles"]["count"]
+                row = {"code": "coloc", "round": rnd, "steps": steps, "particles": n,
+                       "substeps": sub,
+                       "wall_s_per_step": rep["run"]["wall_s"] / steps,
+                       "wall_ns_per_particle_substep": rep["run"]["wall_s"] / (steps * n * sub)
+                       * 1e9,
+                       "cpu_ns_per_particle_substep": busy / (steps * n * sub) * 1e9,
+                       "contacts_per_particle": statistics.mean(cns) if cns else float("nan"),
+                       "process_wall_s": wall, "process_cpu_s": cpu}
+            else:
+                for t in os.listdir(foam):
+                    if re.fullmatch(r"[0-9.e-]+", t) and t != "0":
+                        shutil.rmtree(os.path.join(foam, t))
+                log = os.path.join(work, f"DPMFoam-r{rnd}.log")
+                wall, cpu_all = timed(ts + ["DPMFoam"], log, cwd=foam, env=foam_env())
+                cpu, wallps, nst, text = per_step_foam(log, skip=1, tail=1)
+                # the log of each step ends at its ExecutionTime line; DPMFoam prints
+                # "N move-collide subCycles" only when N > 1
+                blocks = re.split(r"ExecutionTime = [^\n]*\n", text)[:-1]
+                cyc = [int(m.group(1)) if m else 1 for m in
+                       (re.search(r"(\d+) move-collide subCycles", b) for b in blocks)]
+                # one "Current number of parcels" line per cloud evolution
+                npar = [int(x) for x in re.findall(r"Current number of parcels\s*=\s*(\d+)", text)]
+                subs = cyc[1:1 + nst]  # the timed steps: the 2nd to the last but one
+                n = npar[-1] if npar else len(p)
+                sub_mean = statistics.mean(subs)
+                times = sorted((t for t in os.listdir(foam) if re.fullmatch(r"[0-9.e-]+", t)
+                                and t != "0"), key=float)
+                try:
+                    cn = contacts_per_particle(foam_positions(foam, times[-1]), radius)
+                except (OSError, IndexError):
+                    cn = float("nan")
+                row = {"code": "DPMFoam", "round": rnd, "steps": nst, "particles": n,
+                       "substeps": sub_mean, "wall_s_per_step": wallps,
+                       "wall_ns_per_particle_substep": wallps / (n * sub_mean) * 1e9,
+                       "cpu_ns_per_particle_substep": cpu / (n * sub_mean) * 1e9,
+                       "contacts_per_particle": cn,
+                       "process_wall_s": wall, "process_cpu_s": cpu_all}
+            row["load1_before"] = load
+            row["load1_after"] = uptime()
+            print("openfoam_bench:", row, flush=True)
+            rows.append(row)
+    notes = (f"{name}: {cfg['domain']['cells']} cells, {n_all:,} particles from coloc's settled "
+             f"bed ({args.settle_steps} steps; coordination of the injected positions "
+             f"{cn0:.2f}), fluid dt {fl_dt:g} s, coloc {sub} DEM sub-steps a fluid step; "
+             f"DPMFoam deltaT {foam_dt:g} s, its own collision sub-cycles; "
+             f"DPMFoam {args.drag}, pairSpringSliderDashpot (alpha {args.alpha:g}, b 1.5, "
+             f"collisionResolutionSteps {args.collision_steps}), {args.foam_steps} timed steps "
+             f"after the injection step; coloc {args.coloc_steps} steps restarted from the "
+             f"checkpoint. Per particle-substep: the whole coupled step / (particles x "
+             f"sub-steps). Both `taskset -c {args.cpu}`.")
+    by = {(r["code"], r["round"]): r for r in rows}
+    more = ["", "| round | DPMFoam sub-steps | DPMFoam contacts/particle | coloc contacts/particle "
+                f"| DPMFoam s/step (of {foam_dt:g} s) | coloc s/step (of {fl_dt:g} s) |",
+            "|---|---|---|---|---|---|"]
+    for k in sorted({r["round"] for r in rows}):
+        a, b = by.get(("DPMFoam", k)), by.get(("coloc", k))
+        if a and b:
+            more.append(f"| {k} | {a['substeps']:.3g} | {a['contacts_per_particle']:.2f} | "
+                        f"{b['contacts_per_particle']:.2f} | {a['wall_s_per_step']:.4g} | "
+                        f"{b['wall_s_per_step']:.4g} |")
+    write_table(args, "fbed" + args.tag, rows, "DPMFoam", "coloc", "ns per particle-substep",
+                "wall_ns_per_particle_substep", "cpu_ns_per_particle_substep", extra=notes,
+                more=more)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    sp = ap.add_subparsers(dest="what", required=True)
+    for what in ("channel", "fbed"):
+        s = sp.add_parser(what)
+        s.add_argument("--coloc", default=os.path.join(ROOT, "build", "coloc"))
+        s.add_argument("--cpu", type=int, default=1, help="the core for taskset -c")
+        s.add_argument("--rounds", type=int, default=3)
+        s.add_argument("--work", default=os.path.join(ROOT, "out", "openfoam"))
+        s.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "openfoam"))
+        s.add_argument("--remesh", action="store_true")
+        s.add_argument("--tag", default="", help="appended to the result file names")
+    c = sp.choices["channel"]
+    c.add_argument("--case", default=os.path.join(ROOT, "bench/cases/fluid-channel.json"))
+    c.add_argument("--steps", type=int, default=20, help="timed steps after a first one")
+    c.add_argument("--dt", type=float, default=0.015)
+    c.add_argument("--n-correctors", type=int, default=2, help="icoFoam PISO correctors")
+    c.add_argument("--order", default="icoFoam,coloc")
+    f = sp.choices["fbed"]
+    f.add_argument("--case", default=os.path.join(ROOT, "bench/cases/fbed-100k.json"))
+    f.add_argument("--settle-steps", type=int, default=230)
+    f.add_argument("--coloc-steps", type=int, default=10)
+    f.add_argument("--foam-steps", type=int, default=4, help="timed DPMFoam steps after the first")
+    f.add_argument("--foam-dt", type=float, default=0.0,
+                   help="DPMFoam's deltaT (default: the case's fluid.dt)")
+    f.add_argument("--particles", type=int, default=0)
+    f.add_argument("--alpha", type=float, default=0.075)
+    f.add_argument("--collision-steps", type=int, default=12)
+    f.add_argument("--drag", default="WenYuDrag")
+    f.add_argument("--order", default="DPMFoam,coloc")
+    args = ap.parse_args()
+    args.case = os.path.abspath(args.case)
+    args.coloc = os.path.abspath(args.coloc)
+    {"channel": channel, "fbed": fbed}[args.what](args)
+
+
+if __name__ == "__main__":
+    main()
