@@ -296,63 +296,81 @@ void Simulation::evaluateDrag(double dt) {
   const bool self = selfVelocity_ != SelfVelocity::None;
   const double vCell = dec_.grid().cellVolume();
   std::string err;
-  for (std::size_t i = 0; i < n; ++i) {
-    double slip2 = 0;
-    for (int d = 0; d < 3; ++d) {
-      const double s = uAt_[d][i] - p.v[d][i];
-      slip2 += s * s;
-    }
-    const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
-    // With the correction the drag law sees the undisturbed fluid fraction too: the sampled one
-    // less the particle's own volume, deposited and read back with the same weights (its share
-    // V / h^3 sum_c w_c^2; self_velocity.hpp).
-    double eps = epsFluid;
-    if (self) {
-      double w2 = volume_[i] / vCell;
+  // In chunks: the drag law's inputs of kDragChunk particles, the law on the chunk at once
+  // (vectorised, drag.hpp), then each particle's implicit response.
+  auto& [cEps, cD, cSlip, cBeta] = dragChunk_;
+  for (std::size_t i0 = 0; i0 < n; i0 += kDragChunk) {
+    const std::size_t m = std::min(kDragChunk, n - i0);
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t i = i0 + j;
+      double slip2 = 0;
       for (int d = 0; d < 3; ++d) {
-        const double f = stencils_.fraction(d, i);
-        w2 *= (1.0 - f) * (1.0 - f) + f * f;
+        const double s = uAt_[d][i] - p.v[d][i];
+        slip2 += s * s;
       }
-      eps = std::clamp(epsAt_[i] + w2, epsMin_, 1.0);
-    }
-    const bool still = frozen || dt <= 0;
-    double beta = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
-    // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
-    // (self_velocity.hpp); c = 0 without the correction.
-    double denom = still ? 1.0 : 1.0 + dt * beta / p.mass[i];
-    std::array<double, 3> ownPressure{};
-    if (self)
-      denom = correctForSelfVelocity(i, epsFluid, eps, std::sqrt(slip2), still ? 0.0 : dt,
-                                     run_.time + std::max(dt, 0.0), beta, ownPressure, err);
-    if (still) {
-      // Particles that cannot move: the plain coefficient and their (zero) velocity.
-      beta_[i] = beta / denom;
-      for (int d = 0; d < 3; ++d) {
-        vDep_[d][i] = p.v[d][i];
-        ownPressure_[d][i] = 0.0;
-      }
-    } else {
-      // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
-      // velocity the particle would reach without drag, v~ = v + dt a, with a the non-drag
-      // acceleration: contacts and gravity (the DEM's last total force less the coupling force
-      // it held) and the pressure-gradient force -V rho_f grad p^n.
-      const double m = p.mass[i];
-      beta_[i] = beta / denom;
-      for (int d = 0; d < 3; ++d) {
-        const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
-        vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
-        if (self) {
-          // The pressure-gradient force of the undisturbed fluid: less the particle's own share
-          // V k F_d, F_d = beta_eff (u_at - v~) with v~ = v + dt (a - V k F_d / m) (implicit).
-          const double k = volume_[i] * ownPressure[d];
-          ownPressure_[d][i] = k;
-          const double F = beta_[i] * (uAt_[d][i] - vDep_[d][i]) / (1.0 - beta_[i] * dt * k / m);
-          vDep_[d][i] -= dt * k * F / m;
+      // With the correction the drag law sees the undisturbed fluid fraction too: the sampled
+      // one less the particle's own volume, deposited and read back with the same weights (its
+      // share V / h^3 sum_c w_c^2; self_velocity.hpp).
+      double eps = std::clamp(epsAt_[i], epsMin_, 1.0);
+      if (self) {
+        double w2 = volume_[i] / vCell;
+        for (int d = 0; d < 3; ++d) {
+          const double f = stencils_.fraction(d, i);
+          w2 *= (1.0 - f) * (1.0 - f) + f * f;
         }
+        eps = std::clamp(epsAt_[i] + w2, epsMin_, 1.0);
+      }
+      cEps[j] = eps;
+      cD[j] = 2.0 * p.radius[i];
+      cSlip[j] = std::sqrt(slip2);
+    }
+    dragCoefficients(drag_, {cEps.data(), m}, {cD.data(), m}, {cSlip.data(), m}, rhoF_, nu_,
+                     {cBeta.data(), m});
+    for (std::size_t j = 0; j < m; ++j)
+      respondToDrag(i0 + j, cEps[j], cSlip[j], cBeta[j], dt, frozen, self, err);
+  }
+  if (self) dec_.comm().raiseIfAny(err);
+}
+
+void Simulation::respondToDrag(std::size_t i, double eps, double slip, double beta, double dt,
+                               bool frozen, bool self, std::string& err) {
+  const ParticleView& p = view_;
+  const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
+  const bool still = frozen || dt <= 0;
+  // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
+  // (self_velocity.hpp); c = 0 without the correction.
+  double denom = still ? 1.0 : 1.0 + dt * beta / p.mass[i];
+  std::array<double, 3> ownPressure{};
+  if (self)
+    denom = correctForSelfVelocity(i, epsFluid, eps, slip, still ? 0.0 : dt,
+                                   run_.time + std::max(dt, 0.0), beta, ownPressure, err);
+  if (still) {
+    // Particles that cannot move: the plain coefficient and their (zero) velocity.
+    beta_[i] = beta / denom;
+    for (int d = 0; d < 3; ++d) {
+      vDep_[d][i] = p.v[d][i];
+      ownPressure_[d][i] = 0.0;
+    }
+  } else {
+    // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
+    // velocity the particle would reach without drag, v~ = v + dt a, with a the non-drag
+    // acceleration: contacts and gravity (the DEM's last total force less the coupling force
+    // it held) and the pressure-gradient force -V rho_f grad p^n.
+    const double m = p.mass[i];
+    beta_[i] = beta / denom;
+    for (int d = 0; d < 3; ++d) {
+      const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
+      vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
+      if (self) {
+        // The pressure-gradient force of the undisturbed fluid: less the particle's own share
+        // V k F_d, F_d = beta_eff (u_at - v~) with v~ = v + dt (a - V k F_d / m) (implicit).
+        const double k = volume_[i] * ownPressure[d];
+        ownPressure_[d][i] = k;
+        const double F = beta_[i] * (uAt_[d][i] - vDep_[d][i]) / (1.0 - beta_[i] * dt * k / m);
+        vDep_[d][i] -= dt * k * F / m;
       }
     }
   }
-  if (self) dec_.comm().raiseIfAny(err);
 }
 
 double Simulation::correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
@@ -385,8 +403,11 @@ double Simulation::correctForSelfVelocity(std::size_t i, double epsFluid, double
       }
       return denom;
     }
-    if (drag_ != DragLaw::Stokes)
-      beta = dragCoefficient(drag_, epsUndisturbed, d, slipSampled / (1.0 - cb), rhoF_, nu_);
+    if (drag_ != DragLaw::Stokes) {
+      // The same (batched) law as evaluateDrag, on one particle.
+      const double slip = slipSampled / (1.0 - cb);
+      dragCoefficients(drag_, {&epsUndisturbed, 1}, {&d, 1}, {&slip, 1}, rhoF_, nu_, {&beta, 1});
+    }
     denom = 1.0 + inertia * beta - c * beta;
     pressure = r.pressure;
   }

@@ -169,6 +169,9 @@ class Simulation {
   void computeStencils();
   void sampleFluidForDrag();
   void evaluateDrag(double dt);
+  /// Particle i's implicit response to its drag coefficient beta (the law's value at eps, slip).
+  void respondToDrag(std::size_t i, double eps, double slip, double beta, double dt, bool frozen,
+                     bool self, std::string& err);
   /// coupling.self_velocity: beta re-evaluated at the undisturbed slip and fluid fraction
   /// epsUndisturbed; returns 1 + dt beta / m - c beta (self_velocity.hpp; dt = 0 for particles
   /// that cannot move), c at tRun after the run's start in fluid of fraction epsFluid; pressure:
@@ -225,6 +228,9 @@ class Simulation {
   /// coupling.self_velocity: V k_d per particle, its own pressure-gradient force per unit drag
   /// (SelfResponse::pressure), from evaluateDrag to applyCouplingForces of the same step.
   std::array<std::vector<double>, 3> ownPressure_;
+  /// evaluateDrag's chunk of particles: the law's inputs eps, d, slip and its output beta.
+  static constexpr std::size_t kDragChunk = 256;
+  std::array<std::array<double, kDragChunk>, 4> dragChunk_{};
 
   RunCounters run_;
   double endTime_ = 0;
