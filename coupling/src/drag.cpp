@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "coloc/core/error.hpp"
-#include "simd_math.hpp"
+#include "drag_packs.hpp"
 
 namespace coloc::coupling {
 
@@ -78,86 +78,31 @@ double dragCoefficient(DragLaw law, double eps, double d, double slip, double rh
   return 0.0;
 }
 
-namespace {
+COLOC_DRAG_PACKS_DEFINE(dragPacksBuild)
 
-using simd::Pack;
-
-// One pack of particles, the same formulas as dragCoefficient() with pow(x, 2) as x * x,
-// pow(a, b) as exp(b log a), log10 as log / ln 10, and branches as lane-wise selections.
-template <DragLaw Law>
-Pack dragPack(Pack eps, Pack d, Pack slip, double rhoF, double nu) {
-  constexpr double pi = std::numbers::pi, ln10 = std::numbers::ln10;
-  const double mu = rhoF * nu;
-  const Pack tiny = simd::splat(1e-12), one = simd::splat(1.0);
-  if constexpr (Law == DragLaw::Stokes) {
-    return 3.0 * pi * mu * d;
-  } else if constexpr (Law == DragLaw::DiFelice) {
-    const Pack re = simd::max(eps * d * slip / nu, tiny);
-    const Pack a = 0.63 + 4.8 / simd::sqrt(re);
-    const Pack lg = 1.5 - simd::log(re) * (1.0 / ln10);
-    const Pack chi = 3.7 - 0.65 * simd::exp(-0.5 * lg * lg);
-    const Pack cdSlip = slip > 0.0 ? a * a * slip : (4.8 * 4.8) * nu / (eps * d);
-    return 0.125 * pi * rhoF * d * d * cdSlip * simd::pow(eps, 2.0 - chi);
-  } else if constexpr (Law == DragLaw::Gidaspow) {
-    const Pack vp = pi * d * d * d / 6.0;
-    const Pack phi = simd::max(1.0 - eps, tiny);
-    const Pack ergun = 150.0 * phi * phi * mu / (eps * d * d) + 1.75 * phi * rhoF * slip / d;
-    const Pack re = simd::max(eps * d * slip / nu, tiny);
-    const Pack lowRe = 24.0 * nu / (eps * d) * (1.0 + 0.15 * simd::pow(re, simd::splat(0.687)));
-    const Pack cdSlip = re < 1000.0 ? lowRe : 0.44 * slip;
-    const Pack wenYu = 0.75 * cdSlip * eps * phi * rhoF / d * simd::pow(eps, simd::splat(-2.65));
-    return (eps < 0.8 ? ergun : wenYu) * vp / phi;
-  } else {
-    const Pack phi = 1.0 - eps;
-    const Pack re = simd::max(eps * d * slip / nu, tiny);
-    const Pack lre = simd::log(re);
-    const Pack f0 = 10.0 * phi / (eps * eps) + eps * eps * (1.0 + 1.5 * simd::sqrt(phi));
-    const Pack num = one / eps + 3.0 * eps * phi + 8.4 * simd::exp(-0.343 * lre);
-    // 10^(3 phi) Re^(-(1 + 4 phi) / 2) as one exp.
-    const Pack den = 1.0 + simd::exp(3.0 * ln10 * phi - 0.5 * (1.0 + 4.0 * phi) * lre);
-    const Pack f = f0 + 0.413 * re / (24.0 * eps * eps) * num / den;
-    return 3.0 * pi * mu * d * eps * f;
-  }
+bool dragCoefficientsOn(DragPacks packs, DragLaw law, std::span<const double> eps,
+                        std::span<const double> d, std::span<const double> slip, double rhoF,
+                        double nu, std::span<double> beta) {
+  if (eps.size() < beta.size() || d.size() < beta.size() || slip.size() < beta.size())
+    throw Error("coupling: dragCoefficients: inputs shorter than the output");
+  const bool avx512 = __builtin_cpu_supports("avx512f");
+  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  // Widest: the widest packs the CPU runs (drag_packs.hpp), the same choice on every rank of a
+  // run on one kind of CPU.
+  if (packs == DragPacks::Widest)
+    packs = avx512 ? DragPacks::Avx512 : avx2 ? DragPacks::Avx2 : DragPacks::Build;
+  if ((packs == DragPacks::Avx512 && !avx512) || (packs == DragPacks::Avx2 && !avx2)) return false;
+  const DragLawPacks f = packs == DragPacks::Avx512 ? dragPacksAvx512
+                         : packs == DragPacks::Avx2 ? dragPacksAvx2
+                                                    : dragPacksBuild;
+  f(law, eps.data(), d.data(), slip.data(), rhoF, nu, beta.data(), beta.size());
+  return true;
 }
-
-template <DragLaw Law>
-void dragPacks(std::span<const double> eps, std::span<const double> d, std::span<const double> slip,
-               double rhoF, double nu, std::span<double> beta) {
-  constexpr std::size_t L = simd::kLanes;
-  const std::size_t n = beta.size(), full = n - n % L;
-  for (std::size_t i = 0; i < full; i += L)
-    simd::store(&beta[i], dragPack<Law>(simd::load(&eps[i]), simd::load(&d[i]),
-                                        simd::load(&slip[i]), rhoF, nu));
-  if (full == n) return;
-  // The remainder as one padded pack through the same code (lanes never mix).
-  double e[L], dd[L], s[L], b[L];
-  for (std::size_t l = 0; l < L; ++l) {
-    const bool in = full + l < n;
-    e[l] = in ? eps[full + l] : 0.5;
-    dd[l] = in ? d[full + l] : 1.0;
-    s[l] = in ? slip[full + l] : 1.0;
-  }
-  simd::store(b, dragPack<Law>(simd::load(e), simd::load(dd), simd::load(s), rhoF, nu));
-  for (std::size_t i = full; i < n; ++i) beta[i] = b[i - full];
-}
-
-}  // namespace
 
 void dragCoefficients(DragLaw law, std::span<const double> eps, std::span<const double> d,
                       std::span<const double> slip, double rhoF, double nu,
                       std::span<double> beta) {
-  if (eps.size() < beta.size() || d.size() < beta.size() || slip.size() < beta.size())
-    throw Error("coupling: dragCoefficients: inputs shorter than the output");
-  switch (law) {
-    case DragLaw::Stokes:
-      return dragPacks<DragLaw::Stokes>(eps, d, slip, rhoF, nu, beta);
-    case DragLaw::DiFelice:
-      return dragPacks<DragLaw::DiFelice>(eps, d, slip, rhoF, nu, beta);
-    case DragLaw::Gidaspow:
-      return dragPacks<DragLaw::Gidaspow>(eps, d, slip, rhoF, nu, beta);
-    case DragLaw::Beetstra:
-      return dragPacks<DragLaw::Beetstra>(eps, d, slip, rhoF, nu, beta);
-  }
+  dragCoefficientsOn(DragPacks::Widest, law, eps, d, slip, rhoF, nu, beta);
 }
 
 }  // namespace coloc::coupling

@@ -123,21 +123,22 @@ inline void pairs(const Stencils& s, std::size_t p, std::int32_t sy, std::int32_
 
 template <std::size_t N>
 void interpolateN(const Stencils& s, std::span<const CellField* const> f,
-                  std::span<double* const> out) {
+                  std::span<double* const> out, std::size_t first, std::size_t count) {
+  // Particles first .. first + count - 1, particle p's values to o[k][p - first].
   const double* data[N];
   double* o[N];
   for (std::size_t k = 0; k < N; ++k) data[k] = f[k]->data().data(), o[k] = out[k];
-  const std::size_t n = s.count();
+  const std::size_t n = first + count;
   if (s.width() == 1) {
-    for (std::size_t p = 0; p < n; ++p) {
+    for (std::size_t p = first; p < n; ++p) {
       const std::int32_t c = s.firstCell(p);
-      for (std::size_t k = 0; k < N; ++k) o[k][p] = 0.0 + 1.0 * data[k][c];
+      for (std::size_t k = 0; k < N; ++k) o[k][p - first] = 0.0 + 1.0 * data[k][c];
     }
     return;
   }
   const std::int32_t sy = s.strideY(), sz = s.strideZ();
   Pairs4 st;
-  for (std::size_t p = 0; p < n; ++p) {
+  for (std::size_t p = first; p < n; ++p) {
     // Per field: the 4 x-pairs summed lane by lane (cells di = 0 and di = 1 apart), then the two
     // lanes: (w0 f0 + w2 f2 + w4 f4 + w6 f6) + (w1 f1 + w3 f3 + w5 f5 + w7 f7), m = di + 2 dj +
     // 4 dk. Each value depends on the particle's own stencil only.
@@ -146,12 +147,13 @@ void interpolateN(const Stencils& s, std::span<const CellField* const> f,
     for (std::size_t k = 0; k < N; ++k) acc[k] = st.w[0] * load2(data[k] + st.c[0]);
     for (int m = 1; m < 4; ++m)
       for (std::size_t k = 0; k < N; ++k) acc[k] += st.w[m] * load2(data[k] + st.c[m]);
-    for (std::size_t k = 0; k < N; ++k) o[k][p] = acc[k][0] + acc[k][1];
+    for (std::size_t k = 0; k < N; ++k) o[k][p - first] = acc[k][0] + acc[k][1];
   }
 }
 
 template <std::size_t N>
-void depositN(const Stencils& s, std::span<const DepositTerm> terms) {
+void depositN(const Stencils& s, std::span<const DepositTerm> terms, std::size_t first,
+              std::size_t count) {
   double* data[N];
   const double* a[N];
   const double* b[N];
@@ -160,10 +162,10 @@ void depositN(const Stencils& s, std::span<const DepositTerm> terms) {
     data[k] = terms[k].f->data().data();
     a[k] = terms[k].a, b[k] = terms[k].b, scale[k] = terms[k].scale;
   }
-  const std::size_t n = s.count();
+  const std::size_t n = first + count;
   const std::int32_t sy = s.strideY(), sz = s.strideZ();
   Pairs4 st;
-  for (std::size_t p = 0; p < n; ++p) {
+  for (std::size_t p = first; p < n; ++p) {
     double v[N];
     for (std::size_t k = 0; k < N; ++k)
       v[k] = b[k] ? scale[k] * (a[k][p] * b[k][p]) : scale[k] * (a[k] ? a[k][p] : 1.0);
@@ -185,13 +187,15 @@ void depositN(const Stencils& s, std::span<const DepositTerm> terms) {
 
 template <std::size_t... I>
 void interpolateAny(const Stencils& s, std::span<const CellField* const> f,
-                    std::span<double* const> out, std::index_sequence<I...>) {
-  ((f.size() == I + 1 ? interpolateN<I + 1>(s, f, out) : void()), ...);
+                    std::span<double* const> out, std::size_t first, std::size_t count,
+                    std::index_sequence<I...>) {
+  ((f.size() == I + 1 ? interpolateN<I + 1>(s, f, out, first, count) : void()), ...);
 }
 
 template <std::size_t... I>
-void depositAny(const Stencils& s, std::span<const DepositTerm> terms, std::index_sequence<I...>) {
-  ((terms.size() == I + 1 ? depositN<I + 1>(s, terms) : void()), ...);
+void depositAny(const Stencils& s, std::span<const DepositTerm> terms, std::size_t first,
+                std::size_t count, std::index_sequence<I...>) {
+  ((terms.size() == I + 1 ? depositN<I + 1>(s, terms, first, count) : void()), ...);
 }
 
 }  // namespace
@@ -200,30 +204,37 @@ void interpolate(const Stencils& s, const CellField& f, std::span<double> out) {
   // The fused kernel on one field: the same sums (in the same order) as a fused pass.
   const CellField* fs[1] = {&f};
   double* o[1] = {out.data()};
-  interpolateN<1>(s, fs, o);
+  interpolateN<1>(s, fs, o, 0, s.count());
 }
 
 void interpolate(const Stencils& s, std::span<const CellField* const> f,
                  std::span<double* const> out) {
-  if (f.size() != out.size() || f.size() > kMaxFusedFields)
+  interpolate(s, f, out, 0, s.count());
+}
+
+void interpolate(const Stencils& s, std::span<const CellField* const> f,
+                 std::span<double* const> out, std::size_t first, std::size_t count) {
+  if (f.size() != out.size() || f.size() > kMaxFusedFields || first + count > s.count())
     throw Error("coupling: interpolate: " + std::to_string(f.size()) + " fields, " +
                 std::to_string(out.size()) + " outputs (at most " +
-                std::to_string(kMaxFusedFields) + ")");
+                std::to_string(kMaxFusedFields) + "), particles " + std::to_string(first) + " + " +
+                std::to_string(count) + " of " + std::to_string(s.count()));
   // Fewer particles than half the cells: one pass a field. The stencils then share few cells,
   // and the 4 rows of cells one field's stencils walk stream better than 4 N rows at once
   // (bench_coupling BM_Sample7: 1e5 particles in 64^3 cells, 2x faster than one fused pass).
   if (2 * s.count() < f[0]->data().size()) {
-    for (std::size_t k = 0; k < f.size(); ++k) interpolate(s, *f[k], {out[k], s.count()});
+    for (std::size_t k = 0; k < f.size(); ++k)
+      interpolateN<1>(s, f.subspan(k, 1), out.subspan(k, 1), first, count);
     return;
   }
-  interpolateAny(s, f, out, std::make_index_sequence<kMaxFusedFields>());
+  interpolateAny(s, f, out, first, count, std::make_index_sequence<kMaxFusedFields>());
 }
 
 void deposit(const Stencils& s, std::span<const DepositTerm> terms) {
   if (terms.size() > kMaxFusedFields)
     throw Error("coupling: deposit: " + std::to_string(terms.size()) + " terms (at most " +
                 std::to_string(kMaxFusedFields) + ")");
-  depositAny(s, terms, std::make_index_sequence<kMaxFusedFields>());
+  depositAny(s, terms, 0, s.count(), std::make_index_sequence<kMaxFusedFields>());
 }
 
 void smooth(const Decomposition& dec, HaloPlan& halo, CellField& f, CellField& scratch) {

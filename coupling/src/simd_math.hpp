@@ -2,11 +2,10 @@
 // (drag.cpp): SLEEF's (libsleef, 1-ulp "u10" variants) on packs of doubles, the pack as wide as
 // the instruction set the build targets.
 //
-//   AVX-512F  (e.g. -DCOLOC_NATIVE=ON on an AVX-512 machine)  8 lanes, SLEEF's run-time dispatcher
-//             among its AVX-512 variants;
-//   AVX2      4 lanes, the AVX2 variant;
-//   otherwise (the portable x86-64 build: SSE2 only)   2 lanes, SLEEF's run-time dispatcher
-//             (it picks its SSE2, SSE4.1 or 128-bit AVX2+FMA variant for the CPU it runs on).
+//   AVX-512F  (drag_avx512.cpp)  8 lanes, SLEEF's run-time dispatcher among its AVX-512 variants;
+//   AVX2      (drag_avx2.cpp)    4 lanes, SLEEF's AVX2 variant;
+//   otherwise (drag.cpp in the portable x86-64 build: SSE2 only)  2 lanes, SLEEF's run-time
+//             dispatcher (its SSE2, SSE4.1 or 128-bit AVX2+FMA variant for the CPU).
 //
 // Every lane goes through the same code: a particle's value depends on its own inputs only, never
 // on the lane or the pack it falls in (the caller pads a partial pack). The choice of variant is
@@ -21,7 +20,9 @@
 #include <cstddef>
 #include <cstring>
 
+// Internal linkage: each translation unit (one per instruction set, drag_packs.hpp) its own copy.
 namespace coloc::coupling::simd {
+namespace {  // NOLINT(google-build-namespaces,cert-dcl59-cpp)
 
 #if defined(__AVX512F__)
 using Pack = __m512d;
@@ -32,8 +33,9 @@ inline Pack log(Pack x) {
 inline Pack exp(Pack x) {
   return Sleef_expd8_u10(x);
 }
+// (the masked form: GCC 12 warns of the unmasked one's undefined pass-through operand)
 inline Pack sqrt(Pack x) {
-  return _mm512_sqrt_pd(x);
+  return _mm512_mask_sqrt_pd(x, 0xff, x);
 }
 #elif defined(__AVX2__)
 using Pack = __m256d;
@@ -85,4 +87,5 @@ inline Pack pow(Pack a, Pack b) {
   return exp(b * log(a));
 }
 
+}  // namespace
 }  // namespace coloc::coupling::simd

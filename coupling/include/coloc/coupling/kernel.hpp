@@ -98,6 +98,10 @@ inline constexpr std::size_t kMaxFusedFields = 8;
 /// s.count() values).
 void interpolate(const Stencils& s, std::span<const CellField* const> f,
                  std::span<double* const> out);
+/// The same for particles first .. first + count - 1 only: out[k][j] = value of particle
+/// first + j (each value as in the whole pass).
+void interpolate(const Stencils& s, std::span<const CellField* const> f,
+                 std::span<double* const> out, std::size_t first, std::size_t count);
 /// One deposit of a fused pass: f_c += sum_i w_ic * scale * q_i with q_i = a_i b_i (b given),
 /// a_i (b null) or 1 (a and b null), as deposit() and depositProduct() form it.
 struct DepositTerm {
