@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "coloc/core/error.hpp"
+#include "drag_packs.hpp"
 
 namespace coloc::coupling {
 
@@ -75,6 +76,33 @@ double dragCoefficient(DragLaw law, double eps, double d, double slip, double rh
     }
   }
   return 0.0;
+}
+
+COLOC_DRAG_PACKS_DEFINE(dragPacksBuild)
+
+bool dragCoefficientsOn(DragPacks packs, DragLaw law, std::span<const double> eps,
+                        std::span<const double> d, std::span<const double> slip, double rhoF,
+                        double nu, std::span<double> beta) {
+  if (eps.size() < beta.size() || d.size() < beta.size() || slip.size() < beta.size())
+    throw Error("coupling: dragCoefficients: inputs shorter than the output");
+  const bool avx512 = __builtin_cpu_supports("avx512f");
+  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  // Widest: the widest packs the CPU runs (drag_packs.hpp), the same choice on every rank of a
+  // run on one kind of CPU.
+  if (packs == DragPacks::Widest)
+    packs = avx512 ? DragPacks::Avx512 : avx2 ? DragPacks::Avx2 : DragPacks::Build;
+  if ((packs == DragPacks::Avx512 && !avx512) || (packs == DragPacks::Avx2 && !avx2)) return false;
+  const DragLawPacks f = packs == DragPacks::Avx512 ? dragPacksAvx512
+                         : packs == DragPacks::Avx2 ? dragPacksAvx2
+                                                    : dragPacksBuild;
+  f(law, eps.data(), d.data(), slip.data(), rhoF, nu, beta.data(), beta.size());
+  return true;
+}
+
+void dragCoefficients(DragLaw law, std::span<const double> eps, std::span<const double> d,
+                      std::span<const double> slip, double rhoF, double nu,
+                      std::span<double> beta) {
+  dragCoefficientsOn(DragPacks::Widest, law, eps, d, slip, rhoF, nu, beta);
 }
 
 }  // namespace coloc::coupling

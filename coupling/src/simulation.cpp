@@ -119,7 +119,7 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   // first step sees no spurious d(eps)/dt.
   gatherParticles();
   computeStencils();
-  evaluateDrag(0.0);  // beta is not used yet (K starts at zero)
+  evaluateDrag(0.0, nullptr);  // beta is not used yet (K starts at zero)
   depositParticles();
   sumDepositsAcrossBlocks();
   updateFluidCoefficients();
@@ -195,8 +195,8 @@ void Simulation::step() {
       waitForSlowestRank();
       gatherParticles();
       computeStencils();
-      sampleFluidForDrag();
-      evaluateDrag(dt);
+      const DragFields fields = fluidForDrag();
+      evaluateDrag(dt, &fields);
       fault::point("coupling", run_.steps + 1);
       depositParticles();
       waitForSlowestRank();
@@ -274,86 +274,140 @@ const CellField& Simulation::sampled(const CellField& f, CellField& smoothed) {
   return smoothed;
 }
 
-void Simulation::sampleFluidForDrag() {
+Simulation::DragFields Simulation::fluidForDrag() {
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
   // eps = 1 - S(solid) is smooth already; the fluid's eps^{n+1}, ghosts filled by its step.
-  // The 7 fields in one pass over the stencils (kernel.hpp).
-  const CellField* f[7] = {&std::as_const(*fluid_).fields().eps};
-  double* out[7] = {epsAt_.data()};
+  DragFields f{&std::as_const(*fluid_).fields().eps};
   for (int d = 0; d < 3; ++d) {
     f[1 + d] = &sampled(uCell_[d], uSmooth_[d]);
     f[4 + d] = &sampled(gradP_[d], gradPSmooth_[d]);
-    out[1 + d] = uAt_[d].data();
-    out[4 + d] = gradPAt_[d].data();
   }
-  interpolate(stencils_, f, out);
+  return f;
 }
 
-void Simulation::evaluateDrag(double dt) {
+void Simulation::evaluateDrag(double dt, const DragFields* fields) {
   ScopedPhase t(timers_, Phase::CouplingDrag);
-  const ParticleView& p = view_;
   const std::size_t n = stencils_.count();
+  const bool self = selfVelocity_ != SelfVelocity::None;
+  std::string err;
+  // Range by range (kSampleChunk particles): the fields sampled at them, then the drag, which
+  // reads the sampled values while they are still in cache. Each phase is timed as its own.
+  for (std::size_t s0 = 0; s0 < n; s0 += kSampleChunk) {
+    const std::size_t sn = std::min(kSampleChunk, n - s0);
+    if (fields) {
+      // The 7 fields at these particles in one pass over their stencils (kernel.hpp), just
+      // before the drag reads them (still in cache).
+      ScopedPhase ts(timers_, Phase::CouplingInterpolate);
+      double* out[7] = {epsAt_.data() + s0};
+      for (int d = 0; d < 3; ++d) {
+        out[1 + d] = uAt_[d].data() + s0;
+        out[4 + d] = gradPAt_[d].data() + s0;
+      }
+      interpolate(stencils_, *fields, out, s0, sn);
+    }
+    evaluateDragOn(s0, sn, dt, err);
+  }
+  if (self) dec_.comm().raiseIfAny(err);
+}
+
+void Simulation::evaluateDragOn(std::size_t first, std::size_t count, double dt, std::string& err) {
+  const ParticleView& p = view_;
   const bool frozen = mode_ == RunMode::DummyDem;
   const bool self = selfVelocity_ != SelfVelocity::None;
   const double vCell = dec_.grid().cellVolume();
-  std::string err;
-  for (std::size_t i = 0; i < n; ++i) {
-    double slip2 = 0;
-    for (int d = 0; d < 3; ++d) {
-      const double s = uAt_[d][i] - p.v[d][i];
-      slip2 += s * s;
+  const bool still = frozen || dt <= 0;
+  auto& [cEps, cD, cSlip, cBeta] = dragChunk_;
+  for (std::size_t i0 = first; i0 < first + count; i0 += kDragChunk) {
+    const std::size_t m = std::min(kDragChunk, first + count - i0);
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t i = i0 + j;
+      const double s0 = uAt_[0][i] - p.v[0][i], s1 = uAt_[1][i] - p.v[1][i],
+                   s2 = uAt_[2][i] - p.v[2][i];
+      cSlip[j] = std::sqrt(s0 * s0 + s1 * s1 + s2 * s2);
+      cEps[j] = std::clamp(epsAt_[i], epsMin_, 1.0);
+      cD[j] = 2.0 * p.radius[i];
     }
-    const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
-    // With the correction the drag law sees the undisturbed fluid fraction too: the sampled one
-    // less the particle's own volume, deposited and read back with the same weights (its share
-    // V / h^3 sum_c w_c^2; self_velocity.hpp).
-    double eps = epsFluid;
     if (self) {
-      double w2 = volume_[i] / vCell;
-      for (int d = 0; d < 3; ++d) {
-        const double f = stencils_.fraction(d, i);
-        w2 *= (1.0 - f) * (1.0 - f) + f * f;
-      }
-      eps = std::clamp(epsAt_[i] + w2, epsMin_, 1.0);
-    }
-    const bool still = frozen || dt <= 0;
-    double beta = dragCoefficient(drag_, eps, 2.0 * p.radius[i], std::sqrt(slip2), rhoF_, nu_);
-    // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
-    // (self_velocity.hpp); c = 0 without the correction.
-    double denom = still ? 1.0 : 1.0 + dt * beta / p.mass[i];
-    std::array<double, 3> ownPressure{};
-    if (self)
-      denom = correctForSelfVelocity(i, epsFluid, eps, std::sqrt(slip2), still ? 0.0 : dt,
-                                     run_.time + std::max(dt, 0.0), beta, ownPressure, err);
-    if (still) {
-      // Particles that cannot move: the plain coefficient and their (zero) velocity.
-      beta_[i] = beta / denom;
-      for (int d = 0; d < 3; ++d) {
-        vDep_[d][i] = p.v[d][i];
-        ownPressure_[d][i] = 0.0;
-      }
-    } else {
-      // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
-      // velocity the particle would reach without drag, v~ = v + dt a, with a the non-drag
-      // acceleration: contacts and gravity (the DEM's last total force less the coupling force
-      // it held) and the pressure-gradient force -V rho_f grad p^n.
-      const double m = p.mass[i];
-      beta_[i] = beta / denom;
-      for (int d = 0; d < 3; ++d) {
-        const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
-        vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
-        if (self) {
-          // The pressure-gradient force of the undisturbed fluid: less the particle's own share
-          // V k F_d, F_d = beta_eff (u_at - v~) with v~ = v + dt (a - V k F_d / m) (implicit).
-          const double k = volume_[i] * ownPressure[d];
-          ownPressure_[d][i] = k;
-          const double F = beta_[i] * (uAt_[d][i] - vDep_[d][i]) / (1.0 - beta_[i] * dt * k / m);
-          vDep_[d][i] -= dt * k * F / m;
+      // With the correction the drag law sees the undisturbed fluid fraction too: the sampled
+      // one less the particle's own volume, deposited and read back with the same weights (its
+      // share V / h^3 sum_c w_c^2; self_velocity.hpp).
+      for (std::size_t j = 0; j < m; ++j) {
+        const std::size_t i = i0 + j;
+        double w2 = volume_[i] / vCell;
+        for (int d = 0; d < 3; ++d) {
+          const double f = stencils_.fraction(d, i);
+          w2 *= (1.0 - f) * (1.0 - f) + f * f;
         }
+        cEps[j] = std::clamp(epsAt_[i] + w2, epsMin_, 1.0);
+      }
+    }
+    dragCoefficients(drag_, {cEps.data(), m}, {cD.data(), m}, {cSlip.data(), m}, rhoF_, nu_,
+                     {cBeta.data(), m});
+    // Each particle's implicit response.
+    if (self || still) {
+      for (std::size_t j = 0; j < m; ++j)
+        respondToDrag(i0 + j, cEps[j], cSlip[j], cBeta[j], dt, still, self, err);
+      continue;
+    }
+    // The common case, respondToDrag's arithmetic without the correction, array by array.
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t i = i0 + j;
+      beta_[i] = cBeta[j] / (1.0 + dt * cBeta[j] / p.mass[i]);
+    }
+    for (int d = 0; d < 3; ++d) {
+      const double *v = p.v[d] + i0, *force = p.force[d] + i0, *mass = p.mass + i0,
+                   *vol = volume_.data() + i0, *gradP = gradPAt_[d].data() + i0;
+      double* out = vDep_[d].data() + i0;
+      if (p.held[d]) {
+        const double* held = p.held[d] + i0;
+        for (std::size_t j = 0; j < m; ++j)
+          out[j] = v[j] + dt * ((force[j] - held[j]) - vol[j] * rhoF_ * gradP[j]) / mass[j];
+      } else {
+        for (std::size_t j = 0; j < m; ++j)
+          out[j] = v[j] + dt * ((force[j] - 0.0) - vol[j] * rhoF_ * gradP[j]) / mass[j];
       }
     }
   }
-  if (self) dec_.comm().raiseIfAny(err);
+}
+
+void Simulation::respondToDrag(std::size_t i, double eps, double slip, double beta, double dt,
+                               bool still, bool self, std::string& err) {
+  const ParticleView& p = view_;
+  const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
+  // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
+  // (self_velocity.hpp); c = 0 without the correction.
+  double denom = still ? 1.0 : 1.0 + dt * beta / p.mass[i];
+  std::array<double, 3> ownPressure{};
+  if (self)
+    denom = correctForSelfVelocity(i, epsFluid, eps, slip, still ? 0.0 : dt,
+                                   run_.time + std::max(dt, 0.0), beta, ownPressure, err);
+  if (still) {
+    // Particles that cannot move: the plain coefficient and their (zero) velocity.
+    beta_[i] = beta / denom;
+    for (int d = 0; d < 3; ++d) {
+      vDep_[d][i] = p.v[d][i];
+      ownPressure_[d][i] = 0.0;
+    }
+  } else {
+    // Implicit particle response (see the header): beta' = beta / (1 + dt beta / m) and the
+    // velocity the particle would reach without drag, v~ = v + dt a, with a the non-drag
+    // acceleration: contacts and gravity (the DEM's last total force less the coupling force
+    // it held) and the pressure-gradient force -V rho_f grad p^n.
+    const double m = p.mass[i];
+    beta_[i] = beta / denom;
+    for (int d = 0; d < 3; ++d) {
+      const double nonDrag = p.nonDrag(d, i) - volume_[i] * rhoF_ * gradPAt_[d][i];
+      vDep_[d][i] = p.v[d][i] + dt * nonDrag / m;
+      if (self) {
+        // The pressure-gradient force of the undisturbed fluid: less the particle's own share
+        // V k F_d, F_d = beta_eff (u_at - v~) with v~ = v + dt (a - V k F_d / m) (implicit).
+        const double k = volume_[i] * ownPressure[d];
+        ownPressure_[d][i] = k;
+        const double F = beta_[i] * (uAt_[d][i] - vDep_[d][i]) / (1.0 - beta_[i] * dt * k / m);
+        vDep_[d][i] -= dt * k * F / m;
+      }
+    }
+  }
 }
 
 double Simulation::correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
@@ -386,8 +440,11 @@ double Simulation::correctForSelfVelocity(std::size_t i, double epsFluid, double
       }
       return denom;
     }
-    if (drag_ != DragLaw::Stokes)
-      beta = dragCoefficient(drag_, epsUndisturbed, d, slipSampled / (1.0 - cb), rhoF_, nu_);
+    if (drag_ != DragLaw::Stokes) {
+      // The same (batched) law as evaluateDrag, on one particle.
+      const double slip = slipSampled / (1.0 - cb);
+      dragCoefficients(drag_, {&epsUndisturbed, 1}, {&d, 1}, {&slip, 1}, rhoF_, nu_, {&beta, 1});
+    }
     denom = 1.0 + inertia * beta - c * beta;
     pressure = r.pressure;
   }

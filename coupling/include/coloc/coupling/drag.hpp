@@ -26,6 +26,7 @@
 // For slip -> 0 every law tends to its finite creeping-flow limit (Re is floored at 1e-12).
 #pragma once
 
+#include <span>
 #include <string>
 
 namespace coloc::coupling {
@@ -37,6 +38,26 @@ const char* dragLawName(DragLaw law);
 
 /// beta (kg/s) of one particle: F_drag = beta (u_f - v_p).
 double dragCoefficient(DragLaw law, double eps, double d, double slip, double rhoF, double nu);
+
+/// beta of n = beta.size() particles at once (eps, d, slip: at least n values each; rhoF and nu
+/// as above): the same laws evaluated with vectorised maths (SLEEF, 1 ulp a function) on packs
+/// of particles, what a coupled run uses. Equal to dragCoefficient() to within 1e-13 relative
+/// (pow(a, b) as exp(b log a), log10 as log / ln 10); each particle's value depends on its own
+/// inputs only (a partial last pack is padded), so it is the same whatever n and the particle's
+/// position in the arrays. The packs are the widest the CPU runs (8 lanes with AVX-512F, 4 with
+/// AVX2 + FMA, else the build's target: 2 with SSE2), chosen at run time also in the portable
+/// build; values may differ in the last bits between those. No allocation.
+void dragCoefficients(DragLaw law, std::span<const double> eps, std::span<const double> d,
+                      std::span<const double> slip, double rhoF, double nu, std::span<double> beta);
+
+/// The instruction sets dragCoefficients() may use: Widest (what it uses), Build (the build's
+/// target, SSE2 in the portable build), Avx2, Avx512.
+enum class DragPacks { Widest, Build, Avx2, Avx512 };
+/// dragCoefficients() on the given packs (tests compare them); false (and nothing computed) where
+/// the CPU lacks the instructions.
+bool dragCoefficientsOn(DragPacks packs, DragLaw law, std::span<const double> eps,
+                        std::span<const double> d, std::span<const double> slip, double rhoF,
+                        double nu, std::span<double> beta);
 
 /// Beetstra's normalised drag F(eps, Re) (exposed for tests).
 double beetstraF(double eps, double re);

@@ -83,7 +83,9 @@ void deposit(const Stencils& s, std::span<const double> q, double scale, CellFie
 /// f_c += sum_i w_ic * scale * (a_i b_i): a deposit of a product without storing it.
 void depositProduct(const Stencils& s, std::span<const double> a, std::span<const double> b,
                     double scale, CellField& f);
-/// out_i = sum_c w_ic f_c.
+/// out_i = sum_c w_ic f_c. Trilinear: the cells in 4 pairs of x-neighbours, two doubles at a time,
+/// summed (w0 f0 + w2 f2 + w4 f4 + w6 f6) + (w1 f1 + w3 f3 + w5 f5 + w7 f7) (m = di + 2 dj + 4 dk);
+/// the deposits add w * q to each cell as forEachCell() lists them.
 void interpolate(const Stencils& s, const CellField& f, std::span<double> out);
 
 /// The fused kernels of a coupling step: one pass over the particles, each particle's stencil
@@ -98,6 +100,10 @@ inline constexpr std::size_t kMaxFusedFields = 8;
 /// s.count() values).
 void interpolate(const Stencils& s, std::span<const CellField* const> f,
                  std::span<double* const> out);
+/// The same for particles first .. first + count - 1 only: out[k][j] = value of particle
+/// first + j (each value as in the whole pass).
+void interpolate(const Stencils& s, std::span<const CellField* const> f,
+                 std::span<double* const> out, std::size_t first, std::size_t count);
 /// One deposit of a fused pass: f_c += sum_i w_ic * scale * q_i with q_i = a_i b_i (b given),
 /// a_i (b null) or 1 (a and b null), as deposit() and depositProduct() form it.
 struct DepositTerm {
