@@ -220,8 +220,22 @@ void DemSolver::Impl::rebuild(bool first) {
 }
 
 std::size_t DemSolver::Impl::memory() const {
-  return columnBytes(p) + bins.bytes() + list.bytes() + hist.bytes() + ghosts.bytes() + cap(perm) +
-         cap(iscr) + cap(body);
+  std::size_t b = 0;
+  memoryParts([&](const char*, std::size_t bytes) { b += bytes; });
+  return b;
+}
+
+Json DemSolver::Impl::memoryByPart() const {
+  Json j = Json::object();
+  forEachField(p, [&](const FieldInfo& fi, const auto* cols) {
+    std::size_t b = 0;
+    for (int k = 0; k < fi.components; ++k) b += cap(cols[k]);
+    j["field." + std::string(fi.name)] = static_cast<double>(b);
+  });
+  memoryParts([&](const char* name, std::size_t bytes) {
+    if (std::string_view(name) != "fields") j[name] = static_cast<double>(bytes);
+  });
+  return j;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -300,6 +314,16 @@ Json DemSolver::diagnostics() const {
   j["neighbors_per_particle"] = loc[4] / n;
   j["rebuilds"] = m.rebuilds;
   j["bytes_per_particle"] = loc[5] / n;
+  {  // the same by part (every rank has the same parts in the same order)
+    const Json parts = m.memoryByPart();
+    std::vector<double> v;
+    for (const auto& [k, b] : parts.items()) v.push_back(b.get<double>());
+    m.comm.sumInPlace(std::span<double>(v));
+    Json per = Json::object();
+    std::size_t c = 0;
+    for (const auto& [k, b] : parts.items()) per[k] = v[c++] / n;
+    j["bytes_by_part"] = per;
+  }
   j["interaction_range"] = m.rc;
   j["skin"] = m.skin;
   j["bin_size"] = {m.bins.bs[0], m.bins.bs[1], m.bins.bs[2]};

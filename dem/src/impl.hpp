@@ -29,6 +29,7 @@
 #include "history.hpp"
 #include "neighbors.hpp"
 #include "pairs.hpp"
+#include "rows.hpp"
 
 namespace coloc::dem {
 
@@ -127,6 +128,26 @@ struct DemSolver::Impl {
   void checkOverlap(double globalMax);
   std::string where() const;
   std::size_t memory() const;
+  /// f(name, bytes) for every part of the solver's storage (capacities): the particle columns
+  /// ("fields"), the bins, the list, the history pool, the ghost plans, scratch, the bodies.
+  template <class F>
+  void memoryParts(F&& f) const {
+    f("fields", detail::columnBytes(p));
+    f("bins", bins.bytes());
+    f("list.rows", detail::cap(list.rowStart));
+    f("list.nbr", detail::cap(list.nbr));
+    f("list.slot", detail::cap(list.slot));
+    f("list.x0", detail::cap(list.x0[0]) + detail::cap(list.x0[1]) + detail::cap(list.x0[2]));
+    f("hist.rows", detail::cap(hist.hStart));
+    f("hist.key", detail::cap(hist.hId));
+    f("hist.shear", detail::cap(hist.hS));
+    f("hist.free", detail::cap(hist.freeSlots));
+    f("ghosts", ghosts.bytes());
+    f("scratch", detail::cap(perm) + detail::cap(iscr) + detail::cap(inScr));
+    f("body", detail::cap(body));
+  }
+  /// memoryParts as bytes by name (fields by their own names, "field.x" ...).
+  Json memoryByPart() const;
   // setup.cpp
   void readMaterials(const Config& cfg);
   void setupBins(const Config& cfg, double dmax, long long total);
