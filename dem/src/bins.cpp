@@ -89,9 +89,6 @@ void DemSolver::Impl::sortByBin() {
   };
   detail::forEachColumn(p, apply);
   // the history rows stay in pre-sort order: buildLists reads row perm[k] for particle k
-  for (int d = 0; d < 3; ++d) ensure(list.x0[d], n);
-  for (int d = 0; d < 3; ++d)
-    list.x0[d].assign(p.x[d].begin(), p.x[d].begin() + static_cast<std::ptrdiff_t>(n));
 }
 
 }  // namespace coloc::dem

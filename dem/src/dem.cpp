@@ -164,7 +164,7 @@ bool DemSolver::Impl::decideRebuild() {
   // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
   // double first, so a lost particle forces the rebuild)
   const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
-  const double *X0 = list.x0[0].data(), *Y0 = list.x0[1].data(), *Z0 = list.x0[2].data();
+  const double *X0 = hist.x0(0, n), *Y0 = hist.x0(1, n), *Z0 = hist.x0(2, n);
   constexpr double kBig = std::numeric_limits<double>::max();
 #pragma omp simd reduction(max : m2)
   for (std::size_t i = 0; i < n; ++i) {
@@ -215,8 +215,18 @@ void DemSolver::Impl::rebuild(bool first) {
   {
     ScopedPhase t(timers, Phase::DemNeighbor);
     buildLists();
+    keepPositions();
   }
   if (!first) ++rebuilds;
+}
+
+void DemSolver::Impl::keepPositions() {
+  // x0 in the keys' array (history.hpp), which the list build has read for the last time
+  const std::size_t n = p.nOwned;
+  ensure(hist.hKey, 3 * n);
+  hist.hKey.resize(3 * n);
+  for (int d = 0; d < 3; ++d)
+    std::copy_n(p.x[d].begin(), n, hist.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
 }
 
 std::size_t DemSolver::Impl::memory() const {

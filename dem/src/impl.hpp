@@ -125,6 +125,8 @@ struct DemSolver::Impl {
   void finalIntegrate();
   bool decideRebuild();
   void rebuild(bool first);
+  /// The owned positions as the rebuild check's reference (x0), at the end of a rebuild.
+  void keepPositions();
   void checkOverlap(double globalMax);
   std::string where() const;
   std::size_t memory() const;
@@ -137,9 +139,8 @@ struct DemSolver::Impl {
     f("list.rows", detail::cap(list.rowStart));
     f("list.nbr", detail::cap(list.nbr));
     f("list.slot", detail::cap(list.slot));
-    f("list.x0", detail::cap(list.x0[0]) + detail::cap(list.x0[1]) + detail::cap(list.x0[2]));
     f("hist.rows", detail::cap(hist.hStart));
-    f("hist.key", detail::cap(hist.hId));
+    f("hist.key_x0", detail::cap(hist.hKey));
     f("hist.shear", detail::cap(hist.hS));
     f("hist.free", detail::cap(hist.freeSlots));
     f("ghosts", ghosts.bytes());

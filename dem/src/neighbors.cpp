@@ -45,14 +45,15 @@ void DemSolver::Impl::buildLists() {
   // the history of (a, b) as seen from a: the row of a keyed by b's id (or the wall code), else
   // the row of b keyed by a's id, negated in place; the entry takes that row as its pool slot
   // (rows are in pre-sort order: row perm[i] for particle i; a taken row's key is cleared)
-  constexpr std::int64_t kTaken = std::numeric_limits<std::int64_t>::min();
+  constexpr double kTaken = -std::numeric_limits<double>::infinity();
+  double* key = hist.hKey.data();
   const auto lookup = [&](std::size_t a, int b) {
     if (a < n) {
       const auto h = static_cast<std::size_t>(perm[a]);
-      const std::int64_t key = b >= 0 ? p.id[static_cast<std::size_t>(b)] : b;
+      const double want = static_cast<double>(b >= 0 ? p.id[static_cast<std::size_t>(b)] : b);
       for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
-        if (hist.hId[static_cast<std::size_t>(e)] == key) {
-          hist.hId[static_cast<std::size_t>(e)] = kTaken;
+        if (key[e] == want) {
+          key[e] = kTaken;
           list.slot.push_back(e);
           return;
         }
@@ -60,8 +61,8 @@ void DemSolver::Impl::buildLists() {
     if (b >= 0 && static_cast<std::size_t>(b) < n) {
       const auto h = static_cast<std::size_t>(perm[static_cast<std::size_t>(b)]);
       for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
-        if (hist.hId[static_cast<std::size_t>(e)] == p.id[a]) {
-          hist.hId[static_cast<std::size_t>(e)] = kTaken;
+        if (key[e] == static_cast<double>(p.id[a])) {
+          key[e] = kTaken;
           for (int k = 0; k < 3; ++k) hist.hS[3 * static_cast<std::size_t>(e) + k] *= -1.0;
           list.slot.push_back(e);
           return;
@@ -115,8 +116,8 @@ void DemSolver::Impl::buildLists() {
   trimRows(list.slot);
   // rows no entry took are free slots
   hist.freeSlots.clear();
-  for (std::size_t e = 0; e < hist.hId.size(); ++e)
-    if (hist.hId[e] != kTaken) hist.freeSlot(static_cast<int>(e));
+  for (std::size_t e = 0; e < hist.slots(); ++e)
+    if (key[e] != kTaken) hist.freeSlot(static_cast<int>(e));
 }
 
 }  // namespace coloc::dem
