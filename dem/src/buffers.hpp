@@ -70,12 +70,12 @@ void ensureRows(std::vector<T>& v, std::size_t need, std::size_t rowsDone, std::
   ensure(v, std::max(need, est));
 }
 
-/// After a row-by-row fill: an extrapolated capacity far above the size (more than 2/kSlack) is
-/// trimmed to the size + 1/kSlack (one copy; grow-only otherwise).
+/// After a row-by-row fill: an extrapolated capacity above the size + 1/kSlack (by more than a
+/// quarter of that headroom) is trimmed to the size + 1/kSlack (one copy; grow-only otherwise).
 template <class T>
 void trimRows(std::vector<T>& v) {
   const std::size_t n = v.size();
-  if (v.capacity() > n + 2 * (n / kSlack) + 64) {
+  if (v.capacity() > n + n / kSlack + n / (4 * kSlack) + 64) {
     std::vector<T> t;
     t.reserve(n + n / kSlack + 16);
     t.assign(v.begin(), v.end());

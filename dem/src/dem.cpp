@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <span>
 
 #include "impl.hpp"
@@ -218,6 +219,15 @@ void DemSolver::Impl::rebuild(bool first) {
     keepPositions();
   }
   if (!first) ++rebuilds;
+}
+
+int* DemSolver::Impl::rebuildInts(std::size_t count) {
+  const std::size_t lines = (count * sizeof(int) + sizeof(Body) - 1) / sizeof(Body) + 1;
+  ensure(body, lines);
+  if (body.size() < lines) body.resize(lines);
+  // the ints take over the storage (the bodies are dead until the next force computation, which
+  // constructs them anew)
+  return std::launder(::new (static_cast<void*>(body.data())) int[count]);
 }
 
 void DemSolver::Impl::keepPositions() {

@@ -57,8 +57,9 @@ void DemSolver::Impl::packHistory() {
   // side for its own particle, with its own copy, as every owned-ghost pair). Done in place: the
   // live pool slots are permuted into row order (no second pool).
   const std::size_t n = p.nOwned, nAll = p.size();
-  ensure(iscr, n);
-  iscr.resize(n);
+  // scratch: the destination code of every particle, then the row cursors
+  int* const code = rebuildInts(2 * n);
+  int* const cur = code + n;
   for (std::size_t i = 0; i < n; ++i) {  // destination rank and periodic wrap of every particle
     double x[3];
     int wrap = 0;
@@ -74,11 +75,11 @@ void DemSolver::Impl::packHistory() {
         }
       }
     }
-    iscr[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
+    code[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
   }
   const auto dup = [&](std::size_t a, int j) {
     return a < n && j >= 0 && static_cast<std::size_t>(j) < n &&
-           iscr[a] != iscr[static_cast<std::size_t>(j)];
+           code[a] != code[static_cast<std::size_t>(j)];
   };
   // pass 1: rows per particle; slots of zero histories are dropped
   ensure(hist.hStart, n + 1);
@@ -118,9 +119,7 @@ void DemSolver::Impl::packHistory() {
     put(s, (get(s) & ~kNone) | static_cast<std::int64_t>(pos));
     put(pos, get(pos) | kTakenPos);
   };
-  std::vector<int>& cur = bins.binOf;  // free until the re-sort
-  ensure(cur, n);
-  cur.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  std::copy(hist.hStart.begin(), hist.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(bins.binItems[q]);
     for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
@@ -150,7 +149,7 @@ void DemSolver::Impl::packHistory() {
     }
   }
   // pass 2: keys, orientation, second copies
-  cur.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  std::copy(hist.hStart.begin(), hist.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(bins.binItems[q]);
     for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {

@@ -17,7 +17,10 @@ void DemSolver::Impl::buildLists() {
   const std::size_t nAll = p.size(), n = p.nOwned;
   // every local particle in (bin, id) order (owned clamped into the block, ghosts into the
   // ghost layer; the owned ones are in that order already)
-  bins.sort(p, nAll, bins.binItems, iscr, static_cast<int>(n));
+  ensure(bins.binItems, nAll);
+  bins.binItems.resize(nAll);
+  // the list's arrays as the sort's scratch (rebuilt below)
+  bins.sort(p, nAll, bins.binItems.data(), list.nbr, list.slot, static_cast<int>(n));
   // Half list. binItems is every local particle in (bin, id) order: the canonical key K (the
   // bin's (z, y, x) position, unwrapped across periodic faces, then the global id) orders the
   // holders the same way at any rank count. The row of holder a lists the partners b with
@@ -70,13 +73,14 @@ void DemSolver::Impl::buildLists() {
     }
     list.slot.push_back(-1);
   };
+  int ba = 0;  // the bin of item q: the run of binItems it lies in
   for (std::size_t q = 0; q < nAll; ++q) {
+    while (bins.binStart[static_cast<std::size_t>(ba) + 1] <= static_cast<int>(q)) ++ba;
     list.rowStart[q] = static_cast<int>(list.nbr.size());
     ensureRows(list.nbr, list.nbr.size() + 64, q, nAll);
     ensureRows(list.slot, list.slot.size() + 64, q, nAll);
     const auto a = static_cast<std::size_t>(bins.binItems[q]);
     const bool ownA = a < n;
-    const int ba = bins.binOf[a];
     const int bx = ba % bins.nbx[0], by = (ba / bins.nbx[0]) % bins.nbx[1], bz = ba / sz;
     const auto visit = [&](int from, int to) {
       for (int t = from; t < to; ++t) {

@@ -242,9 +242,9 @@ void DemSolver::Impl::restore(DemState& st) {
   for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
   hist.hKey.assign(nh, 0.0);
   hist.hS.assign(3 * nh, 0.0);
-  iscr.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  std::vector<int> cur(hist.hStart.begin(), hist.hStart.end() - 1);
   for (std::size_t h = 0; h < nh; ++h) {
-    const auto e = static_cast<std::size_t>(iscr[static_cast<std::size_t>(row[h])]++);
+    const auto e = static_cast<std::size_t>(cur[static_cast<std::size_t>(row[h])]++);
     const double* rec = &mine[h * kHistRec];
     hist.hKey[e] = static_cast<double>(historyPartner(rec));
     std::copy_n(historyShear(rec), 3, &hist.hS[3 * e]);
