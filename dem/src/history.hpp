@@ -28,7 +28,9 @@ struct HistoryPool {
   /// Slots in the pool (live and free).
   std::size_t slots() const { return hS.size() / 3; }
   /// The rebuild check's reference positions, column d (valid between rebuilds).
-  const double* x0(int d, std::size_t n) const { return hKey.data() + static_cast<std::size_t>(d) * n; }
+  const double* x0(int d, std::size_t n) const {
+    return hKey.data() + static_cast<std::size_t>(d) * n;
+  }
 
   [[gnu::noinline, gnu::cold]] int newSlot() {
     std::size_t s;

@@ -105,7 +105,7 @@ struct DemSolver::Impl {
   // the (bin, id) re-sort's permutation, from sortByBin to the end of buildLists (perm[k]: the
   // history row of particle k), in the rebuild's scratch (rebuildInts)
   int* perm = nullptr;
-  detail::PairChunk chunk;             // the force loop's touching pairs (pairs.hpp)
+  detail::PairChunk chunk;  // the force loop's touching pairs (pairs.hpp)
   // the force loop's packed particles (pairs.hpp: Body). `packed`: the rows of `body` match
   // the particles (same order and count) since the last force computation, i.e. no rebuild
   // since (rebuild() clears it); the step then keeps them current: initialIntegrate writes the

@@ -255,7 +255,7 @@ void DemSolver::Impl::restore(DemState& st) {
   checkTimeStep();
   rebuild(true);
   hist.compact(list.slot);  // the rows held every history twice (under both particles of a pair)
-  trimRows(hist.hKey);       // sized for those rows, now x0 (3 per particle)
+  trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
   {
     ScopedPhase f(timers, Phase::DemForce);
     std::vector<double> keep;
