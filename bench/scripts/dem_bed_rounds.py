@@ -5,11 +5,11 @@ Each round runs every code once, back to back, pinned to one core (taskset -c CO
 million particle-steps per second by wall time and by CPU time, with the load average at the
 round's start. Codes (any subset, in the order given):
 
-  lammps:PATH_TO_DATA           LAMMPS gran/hertz/history (lmp), the anchor input in.lammps
-  liggghts:PATH_TO_DATA         LIGGGHTS (liggghts), in.liggghts
+  lammps:PATH_TO_DATA           LAMMPS gran/hertz/history (lmp), bench/peers/dem-bed.lammps
+  liggghts:PATH_TO_DATA         LIGGGHTS (liggghts), bench/peers/dem-bed.liggghts
   coloc:LABEL:BINARY:STATE[:CASE]  bench_dem BM_DemBed restored from STATE (DEM_BED_LOAD)
 
-  dem_bed_rounds.py --rounds 5 --anchors DIR --nrelax 200 --nsteps 1000 \
+  dem_bed_rounds.py --rounds 5 --nrelax 200 --nsteps 1000 \
       lammps:/tmp/bed.data coloc:main:/tmp/bench_dem_main:/tmp/bed.state \
       coloc:new:build/bench/bench_dem:/tmp/bed.state
 """
@@ -31,14 +31,14 @@ def run(cmd, env=None):
 
 
 def peer(kind, data, a):
-    anchors = a.anchors
+    peers = a.peers
     if kind == "lammps":
-        cmd = ["taskset", "-c", a.core, "lmp", "-in", os.path.join(anchors, "in.lammps"), "-var",
+        cmd = ["taskset", "-c", a.core, "lmp", "-in", os.path.join(peers, "dem-bed.lammps"), "-var",
                "data", data, "-var", "nrelax", str(a.nrelax), "-var", "nsteps", str(a.nsteps),
                "-var", "model", "hertz", "-log", "none"]
     else:
         cmd = ["taskset", "-c", a.core, "liggghts", "-nocite", "-log", "none", "-in",
-               os.path.join(anchors, "in.liggghts"), "-var", "data", data, "-var", "zhi",
+               os.path.join(peers, "dem-bed.liggghts"), "-var", "data", data, "-var", "zhi",
                str(a.zhi), "-var", "nrelax", str(a.nrelax), "-var", "nsteps", str(a.nsteps)]
     out, _ = run(cmd)
     loops = re.findall(r"Loop time of ([0-9.eE+-]+) on \d+ procs for (\d+) steps with (\d+) atoms",
@@ -77,7 +77,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--core", default="1")
-    ap.add_argument("--anchors", required=True, help="folder with in.lammps and in.liggghts")
+    ap.add_argument("--peers", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                      "..", "peers"),
+                    help="folder with dem-bed.lammps and dem-bed.liggghts (default bench/peers)")
     ap.add_argument("--nrelax", type=int, default=200)
     ap.add_argument("--nsteps", type=int, default=1000)
     ap.add_argument("--zhi", type=float, default=0.06)
