@@ -10,7 +10,9 @@
 //                               times 100 sub-steps per iteration. Counters: particle_steps_per_s,
 //                               contacts_per_particle, bytes_per_particle (the solver's own
 //                               arrays), rss_per_particle (peak RSS growth from before the solver
-//                               was built), and the time split of the timed steps.
+//                               was built), rss_run_per_particle (resident growth at the end,
+//                               after the state file's buffers are gone), and the time split of
+//                               the timed steps; the solver's bytes by part go to stderr.
 //                               DEM_BED_DUMP=file writes the settled bed as a LIGGGHTS data file.
 //                               DEM_BED_SAVE=file (1 rank) writes the settled DemState (particles,
 //                               forces, contact histories; binary), DEM_BED_LOAD=file restores it
@@ -19,8 +21,10 @@
 // Benchmarks that exchange MPI messages use fixed iteration counts so every rank runs the same
 // number; the reported time is the slowest rank's (manual time).
 #include <benchmark/benchmark.h>
+#include <malloc.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
@@ -203,6 +207,14 @@ coloc::dem::DemState loadState(const std::string& file, int rank, int size) {
   return st;
 }
 
+/// The resident set now (VmRSS, /proc/self/statm), bytes.
+long long residentBytes() {
+  std::ifstream in("/proc/self/statm");
+  long long pages = 0, rss = 0;
+  in >> pages >> rss;
+  return rss * 4096;
+}
+
 void BM_DemBed(benchmark::State& state) {
   const char* env = std::getenv("DEM_BED_CASE");
   const std::string path = env ? env : COLOC_SOURCE_DIR "/bench/cases/dem-bed.json";
@@ -210,6 +222,7 @@ void BM_DemBed(benchmark::State& state) {
   const int settle = settleEnv ? std::atoi(settleEnv) : 3000;
   const auto comm = coloc::Comm::world();
   const long long rss0 = comm.max(coloc::peakRssBytes());
+  const long long rssStart = residentBytes();
   const auto cfg = coloc::Config::load(comm, path, {}, schema());
   const auto dec = coloc::decompositionFromConfig(comm, cfg);
   coloc::Timers timers;
@@ -218,6 +231,9 @@ void BM_DemBed(benchmark::State& state) {
                            dec, cfg, timers, loadState(load, dec.rank(), dec.size()))
                      : std::make_unique<coloc::dem::DemSolver>(dec, cfg, timers);
   auto& dem = *demPtr;
+  // the state file's buffers are freed by now: their pages go back to the system, so that the
+  // resident growth at the end (rss_run_per_particle) is the solver's, not the loader's leftovers
+  if (load) malloc_trim(0);
   for (int s = 0; s < settle; ++s) dem.substep();
   if (const char* save = std::getenv("DEM_BED_SAVE"); save && dec.size() == 1)
     saveState(dem.saveState(), save);
@@ -264,8 +280,17 @@ void BM_DemBed(benchmark::State& state) {
   state.counters["contacts_per_particle"] = d["contacts_per_particle"].get<double>();
   state.counters["neighbors_per_particle"] = d["neighbors_per_particle"].get<double>();
   state.counters["bytes_per_particle"] = d["bytes_per_particle"].get<double>();
+  if (comm.rank() == 0 && d.contains("bytes_by_part")) {  // where the bytes go
+    std::ostringstream os;
+    os << "bytes per particle by part:";
+    for (const auto& [k, b] : d["bytes_by_part"].items()) os << " " << k << " " << b.get<double>();
+    std::fprintf(stderr, "%s\n", os.str().c_str());
+  }
   state.counters["rss_per_particle"] =
       static_cast<double>(rss1 - rss0) * dec.size() / static_cast<double>(n);
+  // resident now, after the timed steps (the restored runs' peak includes the state file)
+  state.counters["rss_run_per_particle"] =
+      static_cast<double>(comm.sum(residentBytes()) - comm.sum(rssStart)) / static_cast<double>(n);
   state.counters["rebuilds"] = static_cast<double>(dem.rebuildCount());
   const auto share = [&](coloc::Phase ph) { return comm.max(timers.seconds(ph)) / wall; };
   state.counters["f_neighbor"] = share(coloc::Phase::DemNeighbor);

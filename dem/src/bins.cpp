@@ -33,8 +33,8 @@ void Bins::setup(const GlobalGrid& grid, const BinLayout& b, const Int3& cellLo,
   }
 }
 
-void Bins::sort(const ParticleStore& p, std::size_t n, std::vector<int>& items,
-                std::vector<int>& scratch, int sortedBelow) {
+void Bins::sort(const ParticleStore& p, std::size_t n, int* items, std::vector<int>& scratch,
+                std::vector<int>& binOf, int sortedBelow) {
   const std::size_t nBins = count();
   const double* X = p.x[0].data();
   const double* Y = p.x[1].data();
@@ -47,8 +47,6 @@ void Bins::sort(const ParticleStore& p, std::size_t n, std::vector<int>& items,
     ++binStart[static_cast<std::size_t>(binOf[i]) + 1];
   }
   for (std::size_t b = 0; b < nBins; ++b) binStart[b + 1] += binStart[b];
-  ensure(items, n);
-  items.resize(n);
   scratch.assign(binStart.begin(), binStart.end() - 1);
   for (std::size_t i = 0; i < n; ++i)
     items[static_cast<std::size_t>(scratch[static_cast<std::size_t>(binOf[i])]++)] =
@@ -57,7 +55,7 @@ void Bins::sort(const ParticleStore& p, std::size_t n, std::vector<int>& items,
   for (std::size_t b = 0; b < nBins; ++b) {
     const int a = binStart[b], e = binStart[b + 1];
     if (e - a > 1 && items[static_cast<std::size_t>(e - 1)] >= sortedBelow)
-      std::sort(items.begin() + a, items.begin() + e, [id](int u, int v) {
+      std::sort(items + a, items + e, [id](int u, int v) {
         return id[static_cast<std::size_t>(u)] < id[static_cast<std::size_t>(v)];
       });
   }
@@ -66,7 +64,8 @@ void Bins::sort(const ParticleStore& p, std::size_t n, std::vector<int>& items,
 void DemSolver::Impl::sortByBin() {
   // owned particles in (bin, id) order: perm[k] is the particle that goes to position k
   const std::size_t n = p.nOwned;
-  bins.sort(p, n, perm, iscr, 0);
+  perm = rebuildInts(n);
+  bins.sort(p, n, perm, list.nbr, list.slot, 0);  // the list is dead until its build
   // applied in place, cycle by cycle (no scratch array: 16 bytes per particle less); a visited
   // position is marked by complementing its perm entry, restored after each array
   const auto apply = [&](auto& vec) {
@@ -89,9 +88,6 @@ void DemSolver::Impl::sortByBin() {
   };
   detail::forEachColumn(p, apply);
   // the history rows stay in pre-sort order: buildLists reads row perm[k] for particle k
-  for (int d = 0; d < 3; ++d) ensure(list.x0[d], n);
-  for (int d = 0; d < 3; ++d)
-    list.x0[d].assign(p.x[d].begin(), p.x[d].begin() + static_cast<std::ptrdiff_t>(n));
 }
 
 }  // namespace coloc::dem

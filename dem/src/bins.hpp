@@ -20,12 +20,13 @@ struct Bins {
   std::array<long long, 3> NbG{}, binLo{}, binHi{};              // global bins, block's range
   std::array<long long, 3> binSplit{1, 1, 1}, binMult{1, 1, 1};  // bin = cell/split or mult cells
   Int3 nb{}, nbx{};  // local bins, and with one ghost layer on each side
-  // the last sort: bin of every item, start of every bin's run, items in (bin, id) order
-  std::vector<int> binOf, binStart, binItems;
+  // the last sort: start of every bin's run, items in (bin, id) order (an item's bin is the run
+  // it lies in)
+  std::vector<int> binStart, binItems;
 
   /// The block's bins for a layout (dec: the block).
   void setup(const GlobalGrid& grid, const BinLayout& b, const Int3& cellLo, const Int3& cellHi);
-  std::size_t bytes() const { return cap(binOf) + cap(binStart) + cap(binItems); }
+  std::size_t bytes() const { return cap(binStart) + cap(binItems); }
   std::size_t count() const { return static_cast<std::size_t>(nbx[0]) * nbx[1] * nbx[2]; }
   long long gbinRaw(double x, int d) const {
     const double s = std::floor((x - origin[d]) / bs[d]);
@@ -58,11 +59,12 @@ struct Bins {
     return b[0] + nbx[0] * (b[1] + nbx[1] * b[2]);
   }
   /// The counting sort: particles [0, n) (the first n of `p`, owned first) by their local bin
-  /// into binOf, binStart and `items` (by bin, then by index); then the run of every bin put in
-  /// id order unless its last item is below `sortedBelow` (owned particles already in (bin, id)
-  /// order need no sort). `scratch`: grow-only int buffer.
-  void sort(const ParticleStore& p, std::size_t n, std::vector<int>& items,
-            std::vector<int>& scratch, int sortedBelow);
+  /// into binStart and `items` (n ints: by bin, then by index); then the run of every bin put in id
+  /// order unless its last item is below `sortedBelow` (owned particles already in (bin, id)
+  /// order need no sort). `scratch`, `binOf`: grow-only int buffers whose contents are lost
+  /// (binOf: every item's bin during the sort; the callers lend a buffer that is dead then).
+  void sort(const ParticleStore& p, std::size_t n, int* items, std::vector<int>& scratch,
+            std::vector<int>& binOf, int sortedBelow);
 };
 
 }  // namespace coloc::dem::detail

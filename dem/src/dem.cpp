@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <span>
 
 #include "impl.hpp"
@@ -165,7 +166,7 @@ bool DemSolver::Impl::decideRebuild() {
   // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
   // double first, so a lost particle forces the rebuild)
   const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
-  const double *X0 = list.x0[0].data(), *Y0 = list.x0[1].data(), *Z0 = list.x0[2].data();
+  const double *X0 = hist.x0(0, n), *Y0 = hist.x0(1, n), *Z0 = hist.x0(2, n);
   constexpr double kBig = std::numeric_limits<double>::max();
 #pragma omp simd reduction(max : m2)
   for (std::size_t i = 0; i < n; ++i) {
@@ -216,13 +217,46 @@ void DemSolver::Impl::rebuild(bool first) {
   {
     ScopedPhase t(timers, Phase::DemNeighbor);
     buildLists();
+    keepPositions();
   }
   if (!first) ++rebuilds;
 }
 
+int* DemSolver::Impl::rebuildInts(std::size_t count) {
+  const std::size_t lines = (count * sizeof(int) + sizeof(Body) - 1) / sizeof(Body) + 1;
+  ensure(body, lines);
+  if (body.size() < lines) body.resize(lines);
+  // the ints take over the storage (the bodies are dead until the next force computation, which
+  // constructs them anew)
+  return std::launder(::new (static_cast<void*>(body.data())) int[count]);
+}
+
+void DemSolver::Impl::keepPositions() {
+  // x0 in the keys' array (history.hpp), which the list build has read for the last time
+  const std::size_t n = p.nOwned;
+  ensure(hist.hKey, 3 * n);
+  hist.hKey.resize(3 * n);
+  for (int d = 0; d < 3; ++d)
+    std::copy_n(p.x[d].begin(), n, hist.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
+}
+
 std::size_t DemSolver::Impl::memory() const {
-  return columnBytes(p) + bins.bytes() + list.bytes() + hist.bytes() + ghosts.bytes() + cap(perm) +
-         cap(iscr) + cap(body);
+  std::size_t b = 0;
+  memoryParts([&](const char*, std::size_t bytes) { b += bytes; });
+  return b;
+}
+
+Json DemSolver::Impl::memoryByPart() const {
+  Json j = Json::object();
+  forEachField(p, [&](const FieldInfo& fi, const auto* cols) {
+    std::size_t b = 0;
+    for (int k = 0; k < fi.components; ++k) b += cap(cols[k]);
+    j["field." + std::string(fi.name)] = static_cast<double>(b);
+  });
+  memoryParts([&](const char* name, std::size_t bytes) {
+    if (std::string_view(name) != "fields") j[name] = static_cast<double>(bytes);
+  });
+  return j;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -301,6 +335,16 @@ Json DemSolver::diagnostics() const {
   j["neighbors_per_particle"] = loc[4] / n;
   j["rebuilds"] = m.rebuilds;
   j["bytes_per_particle"] = loc[5] / n;
+  {  // the same by part (every rank has the same parts in the same order)
+    const Json parts = m.memoryByPart();
+    std::vector<double> v;
+    for (const auto& [k, b] : parts.items()) v.push_back(b.get<double>());
+    m.comm.sumInPlace(std::span<double>(v));
+    Json per = Json::object();
+    std::size_t c = 0;
+    for (const auto& [k, b] : parts.items()) per[k] = v[c++] / n;
+    j["bytes_by_part"] = per;
+  }
   j["interaction_range"] = m.rc;
   j["skin"] = m.skin;
   j["bin_size"] = {m.bins.bs[0], m.bins.bs[1], m.bins.bs[2]};

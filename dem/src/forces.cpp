@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <span>
 #include <string>
 
@@ -64,7 +65,8 @@ void DemSolver::Impl::forces(bool update, bool stepped) {
     const double *R = p.radius.data(), *Ms = p.mass.data();
     Body* Bw = body.data();
     for (std::size_t i = ownedCurrent ? n : 0; i < nAll; ++i)
-      Bw[i] = Body{{X0[i], X1[i], X2[i]}, R[i], {V0[i], V1[i], V2[i]}, Ms[i]};
+      ::new (static_cast<void*>(Bw + i))
+          Body{{X0[i], X1[i], X2[i]}, R[i], {V0[i], V1[i], V2[i]}, Ms[i]};
   }
   packed = true;
   const Body* B = body.data();

@@ -92,7 +92,7 @@ void DemSolver::Impl::packMigrant(std::size_t i, std::size_t W, double* out) con
   out += W;
   *out++ = h1 - h0;
   for (int e = h0; e < h1; ++e) {
-    *out++ = static_cast<double>(hist.hId[static_cast<std::size_t>(e)]);
+    *out++ = hist.hKey[static_cast<std::size_t>(e)];
     for (int k = 0; k < 3; ++k)
       *out++ = hist.hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
   }
@@ -107,14 +107,14 @@ void DemSolver::Impl::unpackMigrants(const double* b, std::size_t len, std::size
     detail::unpackRow(p, kOpMigrate, b + q, i, true);
     const int nh = static_cast<int>(b[q + W]);
     q += W + 1;
-    ensure(hist.hId, hist.hId.size() + static_cast<std::size_t>(nh));
+    ensure(hist.hKey, hist.hKey.size() + static_cast<std::size_t>(nh));
     ensure(hist.hS, hist.hS.size() + 3 * static_cast<std::size_t>(nh));
     ensure(hist.hStart, hist.hStart.size() + 1);
     for (int e = 0; e < nh; ++e, q += 4) {
-      hist.hId.push_back(static_cast<std::int64_t>(b[q]));
+      hist.hKey.push_back(b[q]);
       hist.hS.insert(hist.hS.end(), b + q + 1, b + q + 4);
     }
-    hist.hStart.push_back(static_cast<int>(hist.hId.size()));
+    hist.hStart.push_back(static_cast<int>(hist.hKey.size()));
   }
 }
 

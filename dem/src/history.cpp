@@ -17,7 +17,7 @@ using namespace detail;
 void HistoryPool::keepRows(std::size_t w, int h0, int h1, int& hw) {
   hStart[w] = hw;
   for (int e = h0; e < h1; ++e, ++hw) {
-    hId[static_cast<std::size_t>(hw)] = hId[static_cast<std::size_t>(e)];
+    hKey[static_cast<std::size_t>(hw)] = hKey[static_cast<std::size_t>(e)];
     for (int k = 0; k < 3; ++k)
       hS[3 * static_cast<std::size_t>(hw) + static_cast<std::size_t>(k)] =
           hS[3 * static_cast<std::size_t>(e) + static_cast<std::size_t>(k)];
@@ -27,20 +27,19 @@ void HistoryPool::keepRows(std::size_t w, int h0, int h1, int& hw) {
 void HistoryPool::truncate(std::size_t rows, int hw) {
   hStart.resize(rows + 1);
   hStart[rows] = hw;
-  hId.resize(static_cast<std::size_t>(hw));
+  hKey.resize(static_cast<std::size_t>(hw));
   hS.resize(3 * static_cast<std::size_t>(hw));
 }
 
 void HistoryPool::compact(std::vector<int>& slot) {
   std::vector<double> v;
-  v.reserve(3 * (hId.size() - freeSlots.size()) + 16);
+  v.reserve(3 * (slots() - freeSlots.size()) + 16);
   for (auto& s : slot)
     if (s >= 0) {
       v.insert(v.end(), hS.begin() + 3 * s, hS.begin() + 3 * s + 3);
       s = static_cast<int>(v.size() / 3 - 1);
     }
   hS.swap(v);
-  std::vector<std::int64_t>(hS.size() / 3, 0).swap(hId);
   std::vector<int>().swap(freeSlots);
 }
 
@@ -58,8 +57,9 @@ void DemSolver::Impl::packHistory() {
   // side for its own particle, with its own copy, as every owned-ghost pair). Done in place: the
   // live pool slots are permuted into row order (no second pool).
   const std::size_t n = p.nOwned, nAll = p.size();
-  ensure(iscr, n);
-  iscr.resize(n);
+  // scratch: the destination code of every particle, then the row cursors
+  int* const code = rebuildInts(2 * n);
+  int* const cur = code + n;
   for (std::size_t i = 0; i < n; ++i) {  // destination rank and periodic wrap of every particle
     double x[3];
     int wrap = 0;
@@ -75,11 +75,11 @@ void DemSolver::Impl::packHistory() {
         }
       }
     }
-    iscr[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
+    code[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
   }
   const auto dup = [&](std::size_t a, int j) {
     return a < n && j >= 0 && static_cast<std::size_t>(j) < n &&
-           iscr[a] != iscr[static_cast<std::size_t>(j)];
+           code[a] != code[static_cast<std::size_t>(j)];
   };
   // pass 1: rows per particle; slots of zero histories are dropped
   ensure(hist.hStart, n + 1);
@@ -101,23 +101,25 @@ void DemSolver::Impl::packHistory() {
   }
   for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
   const auto T = static_cast<std::size_t>(hist.hStart[n]);
-  const std::size_t M = std::max(T, hist.hId.size());
-  ensure(hist.hId, M);
-  hist.hId.resize(M);
+  const std::size_t M = std::max(T, hist.slots());
+  // the keys' array held x0 until now (the rebuild check is done)
+  std::vector<double>& key = hist.hKey;
+  ensure(key, M);
+  key.resize(M);
   ensure(hist.hS, 3 * M);
   hist.hS.resize(3 * M);
   // target position of every pool slot (live ones to their row, the others to the free rows),
-  // kept in hId, which pass 2 overwrites with the keys: bits 0-31 the target, bit 32 "position
-  // taken", bit 33 "moved"
+  // kept in the keys' array, which pass 2 overwrites with the keys: bits 0-31 the target, bit 32
+  // "position taken", bit 33 "moved" (integers below 2^34, exact in the doubles)
   constexpr std::int64_t kNone = 0xffffffffLL, kTakenPos = 1LL << 32, kMoved = 1LL << 33;
-  for (std::size_t s = 0; s < M; ++s) hist.hId[s] = kNone;
+  const auto get = [&](std::size_t s) { return static_cast<std::int64_t>(key[s]); };
+  const auto put = [&](std::size_t s, std::int64_t v) { key[s] = static_cast<double>(v); };
+  for (std::size_t s = 0; s < M; ++s) put(s, kNone);
   const auto setTarget = [&](std::size_t s, std::size_t pos) {
-    hist.hId[s] = (hist.hId[s] & ~kNone) | static_cast<std::int64_t>(pos);
-    hist.hId[pos] |= kTakenPos;
+    put(s, (get(s) & ~kNone) | static_cast<std::int64_t>(pos));
+    put(pos, get(pos) | kTakenPos);
   };
-  std::vector<int>& cur = bins.binOf;  // free until the re-sort
-  ensure(cur, n);
-  cur.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  std::copy(hist.hStart.begin(), hist.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(bins.binItems[q]);
     for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
@@ -130,24 +132,24 @@ void DemSolver::Impl::packHistory() {
     }
   }
   for (std::size_t s = 0, pos = 0; s < M; ++s) {
-    if ((hist.hId[s] & kNone) != kNone) continue;
-    while (hist.hId[pos] & kTakenPos) ++pos;
+    if ((get(s) & kNone) != kNone) continue;
+    while (get(pos) & kTakenPos) ++pos;
     setTarget(s, pos);
   }
   for (std::size_t s = 0; s < M; ++s) {  // move slot s to its target, cycle by cycle
-    if (hist.hId[s] & kMoved) continue;
+    if (get(s) & kMoved) continue;
     double v[3] = {hist.hS[3 * s], hist.hS[3 * s + 1], hist.hS[3 * s + 2]};
     std::size_t k = s;
     for (;;) {
-      const auto t = static_cast<std::size_t>(hist.hId[k] & kNone);
-      hist.hId[k] |= kMoved;
+      const auto t = static_cast<std::size_t>(get(k) & kNone);
+      put(k, get(k) | kMoved);
       for (int c = 0; c < 3; ++c) std::swap(v[c], hist.hS[3 * t + static_cast<std::size_t>(c)]);
       if (t == s) break;
       k = t;
     }
   }
   // pass 2: keys, orientation, second copies
-  cur.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  std::copy(hist.hStart.begin(), hist.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(bins.binItems[q]);
     for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
@@ -156,20 +158,21 @@ void DemSolver::Impl::packHistory() {
       double* v =
           &hist.hS[3 * static_cast<std::size_t>(cur[a < n ? a : static_cast<std::size_t>(j)])];
       if (a < n) {
-        hist.hId[static_cast<std::size_t>(cur[a]++)] =
-            j >= 0 ? p.id[static_cast<std::size_t>(j)] : j;
+        key[static_cast<std::size_t>(cur[a]++)] =
+            static_cast<double>(j >= 0 ? p.id[static_cast<std::size_t>(j)] : j);
       } else {  // under the owned partner, seen from it
-        hist.hId[static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++)] = p.id[a];
+        key[static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++)] =
+            static_cast<double>(p.id[a]);
         for (int c = 0; c < 3; ++c) v[c] = -v[c];
       }
       if (dup(a, j)) {
         const auto r = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
-        hist.hId[r] = p.id[a];
+        key[r] = static_cast<double>(p.id[a]);
         for (int c = 0; c < 3; ++c) hist.hS[3 * r + static_cast<std::size_t>(c)] = -v[c];
       }
     }
   }
-  hist.hId.resize(T);
+  key.resize(T);
   hist.hS.resize(3 * T);
   hist.freeSlots.clear();
 }

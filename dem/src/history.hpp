@@ -2,9 +2,14 @@
 //
 // hS holds 3 doubles per slot. Between rebuilds the slots are used by the neighbour-list entries
 // of touching pairs (NeighborList::slot), with a free list; from the packing at a rebuild to the
-// next list build they are rows per owned particle (hStart, key hId = the partner's global id,
+// next list build they are rows per owned particle (hStart, key hKey = the partner's global id,
 // walls -1..-6), which migration carries; the list build then takes its entries' slots from the
 // rows (no second pool).
+//
+// The keys are needed only from the packing to the list build, and the positions at the last
+// sort (x0, the rebuild check's reference) only between rebuilds: the two share one array, hKey
+// (keys as doubles, exact for ids below 2^53, as in every particle row), so the keys cost no
+// memory of their own. The rebuild writes x0 after the list build (Impl::keepPositions).
 #pragma once
 
 #include <cstdint>
@@ -16,9 +21,16 @@ namespace coloc::dem::detail {
 
 struct HistoryPool {
   std::vector<int> hStart;
-  std::vector<std::int64_t> hId;
+  std::vector<double> hKey;  // keys of the rows (a rebuild), else x0: 3 columns of nOwned
   std::vector<double> hS;
   std::vector<int> freeSlots;
+
+  /// Slots in the pool (live and free).
+  std::size_t slots() const { return hS.size() / 3; }
+  /// The rebuild check's reference positions, column d (valid between rebuilds).
+  const double* x0(int d, std::size_t n) const {
+    return hKey.data() + static_cast<std::size_t>(d) * n;
+  }
 
   [[gnu::noinline, gnu::cold]] int newSlot() {
     std::size_t s;
@@ -26,9 +38,7 @@ struct HistoryPool {
       s = static_cast<std::size_t>(freeSlots.back());
       freeSlots.pop_back();
     } else {
-      s = hId.size();
-      ensure(hId, s + 1);
-      hId.push_back(0);
+      s = slots();
       ensure(hS, 3 * s + 3);
       hS.resize(3 * s + 3);
     }
@@ -45,7 +55,7 @@ struct HistoryPool {
   void truncate(std::size_t rows, int hw);
   /// The live slots of `slot` (list entries, -1: none) packed densely, renumbered; no free list.
   void compact(std::vector<int>& slot);
-  std::size_t bytes() const { return cap(hStart) + cap(hId) + cap(hS) + cap(freeSlots); }
+  std::size_t bytes() const { return cap(hStart) + cap(hKey) + cap(hS) + cap(freeSlots); }
 };
 
 }  // namespace coloc::dem::detail

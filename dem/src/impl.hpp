@@ -29,6 +29,7 @@
 #include "history.hpp"
 #include "neighbors.hpp"
 #include "pairs.hpp"
+#include "rows.hpp"
 
 namespace coloc::dem {
 
@@ -100,14 +101,22 @@ struct DemSolver::Impl {
   detail::NeighborList list;
   detail::HistoryPool hist;
   detail::GhostPlan ghosts;
-  std::vector<int> perm, iscr, inScr;  // scratch (grow-only)
-  detail::PairChunk chunk;             // the force loop's touching pairs (pairs.hpp)
+  std::vector<int> inScr;  // scratch (grow-only)
+  // the (bin, id) re-sort's permutation, from sortByBin to the end of buildLists (perm[k]: the
+  // history row of particle k), in the rebuild's scratch (rebuildInts)
+  int* perm = nullptr;
+  detail::PairChunk chunk;  // the force loop's touching pairs (pairs.hpp)
   // the force loop's packed particles (pairs.hpp: Body). `packed`: the rows of `body` match
   // the particles (same order and count) since the last force computation, i.e. no rebuild
   // since (rebuild() clears it); the step then keeps them current: initialIntegrate writes the
   // owned bodies and resets the force and torque sums (gravity + fExt) after its half kick.
+  // From the start of a rebuild to the next force computation, which packs every body anew,
+  // their storage is the rebuild's int scratch (rebuildInts).
   std::vector<detail::Body> body;
   bool packed = false;
+  /// `count` ints of scratch in the bodies' storage (grown if needed), valid until the next force
+  /// computation; only inside a rebuild (packed is false).
+  int* rebuildInts(std::size_t count);
 
   long long rebuilds = 0, steps = 0;
   // what the last force computation saw (forces.cpp): contacts of owned particles, wall
@@ -124,9 +133,30 @@ struct DemSolver::Impl {
   void finalIntegrate();
   bool decideRebuild();
   void rebuild(bool first);
+  /// The owned positions as the rebuild check's reference (x0), at the end of a rebuild.
+  void keepPositions();
   void checkOverlap(double globalMax);
   std::string where() const;
   std::size_t memory() const;
+  /// f(name, bytes) for every part of the solver's storage (capacities): the particle columns
+  /// ("fields"), the bins, the list, the history pool, the ghost plans, scratch, the bodies.
+  template <class F>
+  void memoryParts(F&& f) const {
+    f("fields", detail::columnBytes(p));
+    f("bins", bins.bytes());
+    f("list.rows", detail::cap(list.rowStart));
+    f("list.nbr", detail::cap(list.nbr));
+    f("list.slot", detail::cap(list.slot));
+    f("hist.rows", detail::cap(hist.hStart));
+    f("hist.key_x0", detail::cap(hist.hKey));
+    f("hist.shear", detail::cap(hist.hS));
+    f("hist.free", detail::cap(hist.freeSlots));
+    f("ghosts", ghosts.bytes());
+    f("scratch", detail::cap(inScr));
+    f("body", detail::cap(body));
+  }
+  /// memoryParts as bytes by name (fields by their own names, "field.x" ...).
+  Json memoryByPart() const;
   // setup.cpp
   void readMaterials(const Config& cfg);
   void setupBins(const Config& cfg, double dmax, long long total);

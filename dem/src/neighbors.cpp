@@ -17,7 +17,10 @@ void DemSolver::Impl::buildLists() {
   const std::size_t nAll = p.size(), n = p.nOwned;
   // every local particle in (bin, id) order (owned clamped into the block, ghosts into the
   // ghost layer; the owned ones are in that order already)
-  bins.sort(p, nAll, bins.binItems, iscr, static_cast<int>(n));
+  ensure(bins.binItems, nAll);
+  bins.binItems.resize(nAll);
+  // the list's arrays as the sort's scratch (rebuilt below)
+  bins.sort(p, nAll, bins.binItems.data(), list.nbr, list.slot, static_cast<int>(n));
   // Half list. binItems is every local particle in (bin, id) order: the canonical key K (the
   // bin's (z, y, x) position, unwrapped across periodic faces, then the global id) orders the
   // holders the same way at any rank count. The row of holder a lists the partners b with
@@ -45,14 +48,15 @@ void DemSolver::Impl::buildLists() {
   // the history of (a, b) as seen from a: the row of a keyed by b's id (or the wall code), else
   // the row of b keyed by a's id, negated in place; the entry takes that row as its pool slot
   // (rows are in pre-sort order: row perm[i] for particle i; a taken row's key is cleared)
-  constexpr std::int64_t kTaken = std::numeric_limits<std::int64_t>::min();
+  constexpr double kTaken = -std::numeric_limits<double>::infinity();
+  double* key = hist.hKey.data();
   const auto lookup = [&](std::size_t a, int b) {
     if (a < n) {
       const auto h = static_cast<std::size_t>(perm[a]);
-      const std::int64_t key = b >= 0 ? p.id[static_cast<std::size_t>(b)] : b;
+      const double want = static_cast<double>(b >= 0 ? p.id[static_cast<std::size_t>(b)] : b);
       for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
-        if (hist.hId[static_cast<std::size_t>(e)] == key) {
-          hist.hId[static_cast<std::size_t>(e)] = kTaken;
+        if (key[e] == want) {
+          key[e] = kTaken;
           list.slot.push_back(e);
           return;
         }
@@ -60,8 +64,8 @@ void DemSolver::Impl::buildLists() {
     if (b >= 0 && static_cast<std::size_t>(b) < n) {
       const auto h = static_cast<std::size_t>(perm[static_cast<std::size_t>(b)]);
       for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
-        if (hist.hId[static_cast<std::size_t>(e)] == p.id[a]) {
-          hist.hId[static_cast<std::size_t>(e)] = kTaken;
+        if (key[e] == static_cast<double>(p.id[a])) {
+          key[e] = kTaken;
           for (int k = 0; k < 3; ++k) hist.hS[3 * static_cast<std::size_t>(e) + k] *= -1.0;
           list.slot.push_back(e);
           return;
@@ -69,13 +73,14 @@ void DemSolver::Impl::buildLists() {
     }
     list.slot.push_back(-1);
   };
+  int ba = 0;  // the bin of item q: the run of binItems it lies in
   for (std::size_t q = 0; q < nAll; ++q) {
+    while (bins.binStart[static_cast<std::size_t>(ba) + 1] <= static_cast<int>(q)) ++ba;
     list.rowStart[q] = static_cast<int>(list.nbr.size());
     ensureRows(list.nbr, list.nbr.size() + 64, q, nAll);
     ensureRows(list.slot, list.slot.size() + 64, q, nAll);
     const auto a = static_cast<std::size_t>(bins.binItems[q]);
     const bool ownA = a < n;
-    const int ba = bins.binOf[a];
     const int bx = ba % bins.nbx[0], by = (ba / bins.nbx[0]) % bins.nbx[1], bz = ba / sz;
     const auto visit = [&](int from, int to) {
       for (int t = from; t < to; ++t) {
@@ -115,8 +120,8 @@ void DemSolver::Impl::buildLists() {
   trimRows(list.slot);
   // rows no entry took are free slots
   hist.freeSlots.clear();
-  for (std::size_t e = 0; e < hist.hId.size(); ++e)
-    if (hist.hId[e] != kTaken) hist.freeSlot(static_cast<int>(e));
+  for (std::size_t e = 0; e < hist.slots(); ++e)
+    if (key[e] != kTaken) hist.freeSlot(static_cast<int>(e));
 }
 
 }  // namespace coloc::dem

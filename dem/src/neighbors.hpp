@@ -12,10 +12,7 @@ namespace coloc::dem::detail {
 struct NeighborList {
   std::vector<int> rowStart, nbr;  // row q (holder binItems[q]): partners nbr[rowStart[q]...]
   std::vector<int> slot;           // per entry: its history in the pool (-1: none)
-  std::array<std::vector<double>, 3> x0;  // owned positions at the last (bin, id) sort
-  std::size_t bytes() const {
-    return cap(rowStart) + cap(nbr) + cap(slot) + cap(x0[0]) + cap(x0[1]) + cap(x0[2]);
-  }
+  std::size_t bytes() const { return cap(rowStart) + cap(nbr) + cap(slot); }
 };
 
 }  // namespace coloc::dem::detail

@@ -240,13 +240,13 @@ void DemSolver::Impl::restore(DemState& st) {
   hist.hStart.assign(n + 1, 0);
   for (std::size_t h = 0; h < nh; ++h) ++hist.hStart[static_cast<std::size_t>(row[h]) + 1];
   for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
-  hist.hId.assign(nh, 0);
+  hist.hKey.assign(nh, 0.0);
   hist.hS.assign(3 * nh, 0.0);
-  iscr.assign(hist.hStart.begin(), hist.hStart.end() - 1);
+  std::vector<int> cur(hist.hStart.begin(), hist.hStart.end() - 1);
   for (std::size_t h = 0; h < nh; ++h) {
-    const auto e = static_cast<std::size_t>(iscr[static_cast<std::size_t>(row[h])]++);
+    const auto e = static_cast<std::size_t>(cur[static_cast<std::size_t>(row[h])]++);
     const double* rec = &mine[h * kHistRec];
-    hist.hId[e] = historyPartner(rec);
+    hist.hKey[e] = static_cast<double>(historyPartner(rec));
     std::copy_n(historyShear(rec), 3, &hist.hS[3 * e]);
   }
   // 4. the canonical rebuild (same orders as the one inside saveState), no force recomputation:
@@ -255,6 +255,7 @@ void DemSolver::Impl::restore(DemState& st) {
   checkTimeStep();
   rebuild(true);
   hist.compact(list.slot);  // the rows held every history twice (under both particles of a pair)
+  trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
   {
     ScopedPhase f(timers, Phase::DemForce);
     std::vector<double> keep;
