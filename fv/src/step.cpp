@@ -50,10 +50,18 @@ void FluidSolver::Impl::fillGhosts() {
     applyScalarBc(dec, f.eps);
     epsGhostsFresh = true;
   }
+  if (superficialInlet) {
+    // The inlet face is an owned face that the halo sends, and its value U / eps follows eps:
+    // set it before the halo. A block only as thick as the ghost width has the next block's
+    // ghost faces reach it (a stale copy there would differ from a serial run).
+    ScopedPhase t(timers, Phase::FluidBoundary);
+    for (int c = 0; c < 3; ++c) applyVelocityBc(dec, bc, c, f.u[c], &f.eps);
+  }
   {
     ScopedPhase t(timers, Phase::FluidHalo);
     for (int c = 0; c < 3; ++c) faceHalo[c].gather(f.u[c], &timers, Exchange::IntraPhysics);
   }
+  // The ghosts beyond a boundary face mirror inner faces, which may be halo faces: after it.
   ScopedPhase t(timers, Phase::FluidBoundary);
   for (int c = 0; c < 3; ++c) applyVelocityBc(dec, bc, c, f.u[c], &f.eps);
   uGhostsFresh = true;

@@ -9,6 +9,8 @@
 //    (requirement of issue 3), on the process grid the case chooses and on a tiled layout
 //    (general boxes from the bisection of a clustered cost: neighbours across edges and
 //    corners, any rank count; issue 14).
+//  - The same with a superficial inlet (face velocity U / eps) on cuts that leave the inlet's
+//    block and the outlet's block 2 cells thick, the ghost width (1-5 ranks).
 //  - After every step, per cell: (eps^{n+1} - eps^n)/dt + div(eps_f u^{n+1}) = 0 up to the
 //    pressure solver's tolerance: ||.||_2 <= 1.05 tol * (flux scale of the right-hand side),
 //    which is PCG's stopping test (fluid.pressure.tol = 1e-10 here).
@@ -111,9 +113,10 @@ double continuityNorm(const Decomposition& dec, const fv::FluidFields& f, const 
 
 /// Steps the case on `par` and alone on this rank, checks continuity every step and the fields
 /// against the serial run at the end.
-void compareWithSerial(Solo& par) {
+void compareWithSerial(Solo& par, std::vector<std::string> overrides = {}) {
   const Comm world = Comm::world();
-  const Config serialCfg = fvtest::config(kCase, {"partition.dims=[1,1,1]"});
+  overrides.push_back("partition.dims=[1,1,1]");
+  const Config serialCfg = fvtest::config(kCase, overrides);
   Solo ser(Comm(MPI_COMM_SELF), serialCfg);
   setInputs(par.solver, par.dec, 0.0);
   setInputs(ser.solver, ser.dec, 0.0);
@@ -185,4 +188,30 @@ TEST(FvParallel, TiledLayoutGivesTheSerialFields) {
   Solo par(tiledDecomposition(world, gridFromConfig(cfg)), cfg);
   ASSERT_TRUE(par.dec.isTiled());
   compareWithSerial(par);
+}
+
+TEST(FvParallel, SuperficialInletNextToABlockTwoCellsThick) {
+  // A superficial inlet (its face carries U / eps of the adjacent cell, and eps moves every
+  // step) on a block only 2 cells thick, the ghost width: the next block's ghost faces reach
+  // the inlet face itself, so the halo must carry the face for the current eps. A block of 2
+  // cells at the outlet too. (Blocks thinner than the ghost width are refused by the halo.)
+  const Comm world = Comm::world();
+  const int p = world.size();
+  if (p > 5)
+    GTEST_SKIP() << "13 cells along x hold at most 5 blocks with 2-cell blocks at both ends "
+                    "and no block under 2 cells";
+  const std::vector<std::string> overrides{"fluid.boundary.xlo.superficial=true"};
+  const Config cfg = fvtest::config(kCase, overrides);
+  const GlobalGrid g = gridFromConfig(cfg);
+  std::array<std::vector<int>, 3> cuts{std::vector<int>{0}, std::vector<int>{0, g.cells[1]},
+                                       std::vector<int>{0, g.cells[2]}};
+  if (p >= 2) cuts[0].push_back(2);
+  // Ranks 1 .. p-2 share cells [2, 11) evenly; the last block is [11, 13) (or [2, 13) at 2).
+  for (int r = 2; r < p; ++r) cuts[0].push_back(2 + 9 * (r - 1) / (p - 2));
+  cuts[0].push_back(g.cells[0]);
+  Solo par(Decomposition::fromCuts(world, g, cuts), cfg);
+  if (p >= 2 && (world.rank() == 0 || (p >= 3 && world.rank() == p - 1))) {
+    EXPECT_EQ(par.dec.cells()[0], 2);
+  }
+  compareWithSerial(par, overrides);
 }

@@ -73,11 +73,6 @@ std::vector<double> state(coupling::Simulation& sim, long long nParticles) {
 TEST(RestartLayouts, SameBlocksBitwiseOtherCutsToRoundOff) {
   const Config cfg = config();
   const Comm world = Comm::world();
-  if (world.size() == 3)
-    GTEST_SKIP() << "open bug (issue 14 note): at 3 ranks the uneven cuts give a block 2 cells "
-                    "thick at the superficial inlet, and the continuation differs from the "
-                    "uniform blocks' by 1.3e-6 relative (cuts of 4 cells, or a plain inlet: "
-                    "round-off); this file runs at 3 ranks for the tiled test below";
   const std::string path = scratch("ck.h5");
   coupling::Layouts layouts = coupling::Simulation::chooseLayouts(world, cfg);
   coupling::Simulation a(cfg, layouts);
