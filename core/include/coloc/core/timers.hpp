@@ -130,7 +130,6 @@ class Timers {
   /// phase that follows (a halo exchange, the DEM's rebuild vote). Every rank must reach the
   /// same sync points in the same order: the solvers call it where all ranks do.
   void setSyncPoints(bool on) { syncPoints_ = on; }
-  bool syncPoints() const { return syncPoints_; }
   void syncPoint(const Comm& comm);
   /// Adds one interval measured outside start/stop (e.g. across objects' lifetimes).
   void add(Phase p, double wallSeconds, double cpuSeconds);
