@@ -354,18 +354,15 @@ void Simulation::evaluateDragOn(std::size_t first, std::size_t count, double dt,
       const std::size_t i = i0 + j;
       beta_[i] = cBeta[j] / (1.0 + dt * cBeta[j] / p.mass[i]);
     }
+    // (no held force: force - 0.0, as ParticleView::nonDrag)
+    static constexpr std::array<double, kDragChunk> kNoneHeld{};
     for (int d = 0; d < 3; ++d) {
       const double *v = p.v[d] + i0, *force = p.force[d] + i0, *mass = p.mass + i0,
-                   *vol = volume_.data() + i0, *gradP = gradPAt_[d].data() + i0;
+                   *vol = volume_.data() + i0, *gradP = gradPAt_[d].data() + i0,
+                   *held = p.held[d] ? p.held[d] + i0 : kNoneHeld.data();
       double* out = vDep_[d].data() + i0;
-      if (p.held[d]) {
-        const double* held = p.held[d] + i0;
-        for (std::size_t j = 0; j < m; ++j)
-          out[j] = v[j] + dt * ((force[j] - held[j]) - vol[j] * rhoF_ * gradP[j]) / mass[j];
-      } else {
-        for (std::size_t j = 0; j < m; ++j)
-          out[j] = v[j] + dt * ((force[j] - 0.0) - vol[j] * rhoF_ * gradP[j]) / mass[j];
-      }
+      for (std::size_t j = 0; j < m; ++j)
+        out[j] = v[j] + dt * ((force[j] - held[j]) - vol[j] * rhoF_ * gradP[j]) / mass[j];
     }
   }
 }
