@@ -31,16 +31,27 @@ Pressure solve latency per PCG iteration: levels x 7 halo exchanges (V(1,1): 2 r
 Network per rank and step, per traffic kind of plan.json (bytes, messages):
   t = messages * latency + bytes / bandwidth_per_rank,
   bandwidth_per_rank = link bandwidth / min(ranks, ranks a node sharing the injection).
+Noise (bench_noise, --noise): the same work runs unevenly on the cores of a real machine (a
+  shared host, frequency changes, the hypervisor); eta(P) = the expected extra time of the
+  slowest of P ranks doing equal work, a fraction of that work, measured for a compute kernel
+  (pair loop) and a memory one (triad at the stream working set); group g's eta mixes them by
+  its memory share m_g. Each rank's work of group g costs eta_g more at the slowest rank: inside
+  the pressure solve and set-up that is fluid time (waited for at hypre's collectives), elsewhere
+  it is waited for at a barrier (wait). Beyond the measured ranks eta grows as the expected
+  maximum of P independent draws of the measured relative times (extrapolated). No noise unless
+  measured: the cluster profiles assume dedicated, quiet cores.
 Shares: fluid = fluid work + pressure + fluid halos; DEM = DEM work + ghost updates; coupling =
 coupling arithmetic; inter-physics = deposit sum + proxies (+ in-rank copies of the independent
-strategy at memory speed); wait = step - mean rank time. The step is the slowest rank's time.
+strategy at memory speed); wait = step - mean rank time. The step is the slowest rank's time
+plus the noise.
 
 Usage:
   model.py calibrate [--busy] REPORT_1RANK.json [--corun REPORT_1RANK_CORUN.json
                      --stream stream.json] [--pfmg1 fv1.json --pfmg2 fv2.json
                      --pingpong pingpong.json] > costs.json
   model.py predict --costs costs.json --plan plan.json --profile edr-ib|PINGPONG.json
-                   [--stream stream.json] [--csv out.csv] [--png out.png] [--title T]
+                   [--stream stream.json] [--noise noise-*.json ...] [--csv out.csv]
+                   [--png out.png] [--title T]
 Validation at 1 and 2 ranks: bench/scripts/validate_model.py.
 """
 import argparse
@@ -171,16 +182,43 @@ def grid_levels(dims):
     return 1 + sum(math.ceil(math.log2(n)) for n in dims if n > 1)
 
 
+def fit_contention_overhead(points):
+    """Least squares of t2 = f t1 / 2 + L o over points (t1, t2, L) of different sizes, each
+    equation scaled by 1 / t2 (the sizes' times differ tenfold): the memory contention f of the
+    solve at 2 ranks and hypre's overhead o a level and neighbour, f >= 1, o >= 0. None where
+    fewer than two sizes (or levels) are given: f and o are then not separable."""
+    if len({p[2] for p in points}) < 2:
+        return None
+    a11 = a12 = a22 = b1 = b2 = 0.0
+    for t1, t2, L in points:
+        x, y = t1 / 2 / t2, L / t2
+        a11, a12, a22 = a11 + x * x, a12 + x * y, a22 + y * y
+        b1, b2 = b1 + x, b2 + y  # right-hand side t2 / t2 = 1
+    det = a11 * a22 - a12 * a12
+    if det <= 0:
+        return None
+    f = (b1 * a22 - b2 * a12) / det
+    o = (a11 * b2 - a12 * b1) / det
+    if o < 0:  # no overhead: f alone
+        o, f = 0.0, b1 / a11
+    if f < 1:  # no contention: o alone
+        f = 1.0
+        o = max(0.0, sum((t2 - t1 / 2) / L for t1, t2, L in points) / len(points))
+    return f, o
+
+
 def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False, how="min"):
     """hypre's cost per PFMG level and face neighbour that a 1-rank run cannot show (comm
     packages, packing, the coarse levels' halos), per PCG iteration and per set-up: from
-    bench_fv's pressure solve at 1 and 2 ranks (2 x 1 x 1: one neighbour),
-    o = (t(2 ranks) - f t(1 rank) / 2) / levels, f the memory contention of the phase at 2 ranks,
-    less the message latencies the network model adds itself; the mean over the cubes
-    (BM_PressureSolve/n). grid="own" takes the point on the case's own grid instead
-    (BM_PressureSolveBox): hypre alone on that grid at 2 ranks, which has measured far less
-    overhead than the same solve shows inside a coupled step (docs/plan.md), so the cubes stay
-    the default."""
+    bench_fv's pressure solve at 1 and 2 ranks (2 x 1 x 1: one neighbour). With cubes of two
+    sizes or more (BM_PressureSolve/32 and /64: a cached and a memory-bound one), the memory
+    contention f of the solve at 2 ranks and the overhead o are fitted together,
+    t(2 ranks) = f t(1 rank) / 2 + levels o (fit_contention_overhead), and f gives the solve's
+    memory share (calibrate). With one point, f = 1 + m (c(2) - 1) from the co-run's memory share
+    m: o = (t(2 ranks) - f t(1 rank) / 2) / levels, a difference of two close numbers that moves
+    with m (docs/plan.md). Either way the message latencies the network model adds itself are
+    taken off o. grid="own" takes the point on the case's own grid instead
+    (BM_PressureSolveBox), with the co-run's m."""
     p1, p2 = bench_points(one, busy, how), bench_points(two, busy, how)
     c2 = costs.get("memory_calibration", {}).get("contention_2", 1.0)
     ms = costs["memory_share"]
@@ -192,20 +230,34 @@ def solver_overhead(costs, one, two, busy, latency, grid=None, use_own=False, ho
         both = [own]
     else:
         both = [n for n in both if n[0] == "cube"]
+    if not both:
+        return None
+    levels = {n: grid_levels(n[1:]) for n in both}
+    fit_it = fit_contention_overhead([(p1[n][0], p2[n][0], levels[n]) for n in both])
+    fit_su = fit_contention_overhead([(p1[n][1], p2[n][1], levels[n]) for n in both])
     o_it, o_su, used = [], [], []
     for n in both:
-        levels = grid_levels(n[1:])
-        o_it.append(max(0.0, p2[n][0] - f_it * p1[n][0] / 2) / levels
-                    - (EXCH_PER_LEVEL + 1) * latency - ALLREDUCES_PER_ITER * latency / levels)
-        o_su.append(max(0.0, p2[n][1] - f_su * p1[n][1] / 2) / levels
-                    - EXCH_PER_SETUP_LEVEL * latency)
+        L = levels[n]
+        o_it.append(max(0.0, p2[n][0] - f_it * p1[n][0] / 2) / L)
+        o_su.append(max(0.0, p2[n][1] - f_su * p1[n][1] / 2) / L)
         used.append([list(n[1:]), p1[n][0], p2[n][0], p1[n][1], p2[n][1]])
-    if not used:
-        return None
-    return {"per_level_neighbour_iteration_s": max(0.0, sum(o_it) / len(o_it)),
-            "per_level_neighbour_setup_s": max(0.0, sum(o_su) / len(o_su)),
-            "from": "the case's own grid" if own in both else "cubes",
-            "points_grid_iter1_iter2_setup1_setup2": used}
+    raw_it = fit_it[1] if fit_it else sum(o_it) / len(o_it)
+    raw_su = fit_su[1] if fit_su else sum(o_su) / len(o_su)
+    # the latencies the network model adds: (levels x 7 + 1) halos and 3 allreduces an
+    # iteration, levels x 2 halos a set-up (one neighbour, log2(2) = 1)
+    lat_it = sum((EXCH_PER_LEVEL + 1) * latency + ALLREDUCES_PER_ITER * latency / levels[n]
+                 for n in both) / len(both)
+    out = {"per_level_neighbour_iteration_s": max(0.0, raw_it - lat_it),
+           "per_level_neighbour_setup_s": max(0.0, raw_su - EXCH_PER_SETUP_LEVEL * latency),
+           "from": "the case's own grid" if own in both else "cubes",
+           "points_grid_iter1_iter2_setup1_setup2": used}
+    if fit_it:
+        out["contention_2_iteration"] = fit_it[0]
+    if fit_su:
+        out["contention_2_setup"] = fit_su[0]
+    out["fit"] = ("contention and overhead fitted together over %d sizes" % len(both)
+                  if fit_it or fit_su else "overhead at the co-run's contention")
+    return out
 
 
 def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None, latency=0.0,
@@ -255,6 +307,15 @@ def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None
                             report["config"]["domain"]["cells"], overhead_grid == "own", how)
         if o:
             costs["pressure_overhead"] = o
+            # the solve's own contention from the cubes replaces the co-run's share for the
+            # pressure groups: they are a few per cent of a coupled step, so a co-run barely
+            # shows them (its share of the solve moved 0.04-0.45 between repeats)
+            c2 = costs.get("memory_calibration", {}).get("contention_2", 1.0)
+            for g, k in (("pressure_solve", "contention_2_iteration"),
+                         ("pressure_setup", "contention_2_setup")):
+                if k in o and c2 > 1.05:
+                    costs["memory_share"][g] = min(1.0, max(0.0, (o[k] - 1) / (c2 - 1)))
+                    costs.setdefault("memory_share_from", {})[g] = "bench_fv cubes (%s)" % k
     return costs
 
 
@@ -273,6 +334,54 @@ def calibrate_median(reports, key="avg", coruns=None, stream=None, pfmg1=None, p
     return costs
 
 
+def noise_of(runs):
+    """The machine's noise from bench_noise JSONs (one a repeat, kernel pairs or triad; both
+    counts for either): {"compute": spec, "memory": spec}, spec = {"by_ranks": {k: eta(k)},
+    "quantiles": [...], "repeats": n}, each figure the median over the repeats. eta(k) = the
+    expected wait for the slowest of k ranks doing the same work, a fraction of the mean work."""
+    out = {}
+    for name, kernels in (("compute", ("pairs", "both")), ("memory", ("triad", "both"))):
+        rs = [r for r in runs if r.get("kernel", "both") == kernels[0]]
+        rs = rs or [r for r in runs if r.get("kernel", "both") == kernels[1]]
+        if not rs:
+            continue
+        ks = sorted({b["ranks"] for r in rs for b in r["by_ranks"]})
+        by = {}
+        for k in ks:
+            v = [b["noise"] for r in rs for b in r["by_ranks"] if b["ranks"] == k]
+            by[str(k)] = median(v)
+        q = [r["relative_time_quantiles"] for r in rs if r.get("relative_time_quantiles")]
+        out[name] = {"by_ranks": by, "quantiles": median_of(q) if q else [],
+                     "repeats": len(rs), "mib": rs[0].get("mib", 0.0)}
+    return out
+
+
+def expected_max_excess(quantiles, n):
+    """E[max of n independent draws] - E[draw] of the distribution given by equally spaced
+    quantiles (each point carrying the same weight)."""
+    q = sorted(quantiles)
+    N = len(q)
+    if N == 0 or n <= 1:
+        return 0.0
+    emax = sum(q[i] * (((i + 1) / N) ** n - (i / N) ** n) for i in range(N))
+    return emax - sum(q) / N
+
+
+def noise_eta(spec, P):
+    """eta(P) of one noise spec: the measured figure where P ranks were measured; beyond, the
+    largest measured figure grown as the expected maximum of P independent draws of the measured
+    relative times grows (an EXTRAPOLATION: independent ranks)."""
+    if not spec or P <= 1:
+        return 0.0
+    by = {int(k): v for k, v in spec["by_ranks"].items()}
+    if P in by:
+        return by[P]
+    k = max(kk for kk in by if kk <= P) if any(kk <= P for kk in by) else min(by)
+    g_k = expected_max_excess(spec.get("quantiles", []), k)
+    g_p = expected_max_excess(spec.get("quantiles", []), P)
+    return by[k] * g_p / g_k if g_k > 0 else by[k]
+
+
 def profile(spec, stream=None):
     if spec in PROFILES:
         prof = dict(PROFILES[spec], name=spec)
@@ -286,6 +395,7 @@ def profile(spec, stream=None):
     if stream is not None:
         prof["memory"] = stream_memory(stream)
         prof["name"] += " + measured stream"
+    prof.setdefault("noise", None)  # dedicated, quiet cores unless a measured noise is given
     return prof
 
 
@@ -350,7 +460,11 @@ def predict_layout(costs, layout, prof):
     def net(kind, r):
         return ks[kind]["messages"][r] * lat + ks[kind]["bytes"][r] / bw
 
-    rows = []
+    noise = prof.get("noise") or {}
+    eta_c, eta_m = noise_eta(noise.get("compute"), P), noise_eta(noise.get("memory"), P)
+    eta = {g: (1 - ms.get(g, 0.0)) * eta_c + ms.get(g, 0.0) * eta_m
+           if noise.get("memory") else eta_c for g in GROUPS}
+    rows, lost = [], []
     for r in range(P):
         cells, parts = pr["cells"][r], pr["particles"][r]
         coupled = pr["proxies"][r] if indep else parts
@@ -374,15 +488,26 @@ def predict_layout(costs, layout, prof):
             inter += ks["force_handover"]["bytes"][r] / prof["memory_Bps"]
         rows.append((fluid + psetup + psolve + fluid_net, dem + dem_net, cpl, inter,
                      psetup + psolve + pressure_net))
+        # the machine's noise: the slowest rank's extra time on the same work, eta of each
+        # group; inside the pressure solve (waited for at hypre's own collectives) it is fluid
+        # time, elsewhere it is waited for at a barrier (wait)
+        lost.append((eta["pressure_setup"] * psetup + eta["pressure_solve"] * psolve,
+                     eta["fluid"] * fluid + eta["dem"] * dem + eta["coupling"] * cpl))
     tot = [sum(x[:4]) for x in rows]
-    step = max(tot)
     mean = [sum(x[i] for x in rows) / P for i in range(5)]
+    in_solve = sum(x[0] for x in lost) / P
+    at_barriers = sum(x[1] for x in lost) / P
+    step = max(tot) + in_solve + at_barriers
+    mean[0] += in_solve
+    mean[4] += in_solve
     busy = sum(mean[:4])
     return {"strategy": layout["strategy"], "ranks": P, "step_s": step,
             "fluid": mean[0] / step, "dem": mean[1] / step, "coupling": mean[2] / step,
             "inter_physics": mean[3] / step, "wait": 1 - busy / step,
             "imbalance": step / busy if busy > 0 else 1.0,
             "pressure": mean[4] / step, "memory_contention": c,
+            "noise": {"compute": eta_c, "memory": eta_m} if noise else None,
+            "noise_wait": at_barriers / step,
             "fluid_of_busy": mean[0] / busy, "dem_of_busy": mean[1] / busy,
             "coupling_of_busy": mean[2] / busy, "inter_physics_of_busy": mean[3] / busy}
 
@@ -407,6 +532,8 @@ def main():
     p.add_argument("--plan", required=True)
     p.add_argument("--profile", required=True)
     p.add_argument("--stream", help="bench_stream JSON: this machine's memory contention")
+    p.add_argument("--noise", nargs="+", help="bench_noise JSONs (kernels pairs and triad, "
+                   "repeats): this machine's noise; default none (dedicated cores)")
     p.add_argument("--csv")
     p.add_argument("--png")
     p.add_argument("--title", default="")
@@ -433,6 +560,13 @@ def main():
         with open(a.stream) as f:
             stream = json.load(f)
     prof = profile(a.profile, stream)
+    if a.noise:
+        runs = []
+        for path in a.noise:
+            with open(path) as f:
+                runs.append(json.load(f))
+        prof["noise"] = noise_of(runs)
+        prof["name"] += " + measured noise"
     out = [predict_layout(costs, L, prof) for L in plan["layouts"] if "error" not in L]
     # speedup against one rank's modelled time (the serial work: sum of the work of all ranks)
     serial = None

@@ -124,6 +124,62 @@ def main():
     check("default: the cubes", cc["pressure_overhead"]["per_level_neighbour_iteration_s"],
           o_it - 8e-6 - 3e-6 / 13)
 
+    # --- contention and overhead fitted together from cubes of two sizes: 16^3 (levels 13) and
+    # 32^3 (levels 16), exact data made with f = 1.5 and o = 10 us (an iteration), f = 1.25 and
+    # o = 20 us (a set-up): the fit returns them exactly; c(2) = 2 gives the solve's memory share
+    # m = (f - 1) / (c(2) - 1) = 0.5 (set-up 0.25), which replaces the co-run's
+    f_fit, o_fit = model.fit_contention_overhead([(1e-3, 1.5 * 0.5e-3 + 13 * 10e-6, 13),
+                                                  (8e-3, 1.5 * 4e-3 + 16 * 10e-6, 16)])
+    check("fit: contention", f_fit, 1.5)
+    check("fit: overhead", o_fit, 10e-6)
+    check("fit: one size is not separable",
+          model.fit_contention_overhead([(1e-3, 1e-3, 13)]) is None, True)
+    # made with f = 0.9 (faster at 2 ranks than half of 1: no contention to fit): f = 1, and o
+    # the mean of (t2 - t1 / 2) / L: (-0.05 + 0.65) / 13 ms and (-0.4 + 0.8) / 16 ms
+    f0, o0 = model.fit_contention_overhead([(1e-3, 0.9 * 0.5e-3 + 13 * 50e-6, 13),
+                                            (8e-3, 0.9 * 4e-3 + 16 * 50e-6, 16)])
+    check("fit: f clamped at 1", f0, 1.0)
+    check("fit: then o alone", o0, 0.5 * (0.6e-3 / 13 + 0.4e-3 / 16))
+
+    def cubes(ranks, f_it, f_su):
+        out = []
+        for n, L, it1, su1 in ((16, 13, 1e-3, 10e-3), (32, 16, 8e-3, 80e-3)):
+            it = it1 if ranks == 1 else f_it * it1 / 2 + L * o_it
+            su = su1 if ranks == 1 else f_su * su1 / 2 + L * o_su
+            out.append({"name": "BM_PressureSolve/%d/0/iterations:3/manual_time" % n,
+                        "run_type": "iteration", "iterations": 4, "time_unit": "ms",
+                        "real_time": 4 * it * 1e3, "cpu_time": 4 * it * 1e3, "ranks": ranks,
+                        "setup_s": su, "setup_cpu_s": su})
+        return {"benchmarks": out}
+    cf = model.calibrate(report(10, alone), "busy_avg", report(10, co), stream, cubes(1, 0, 0),
+                         cubes(2, 1.5, 1.25), 1e-6)
+    of = cf["pressure_overhead"]
+    check("fitted contention of the solve", of["contention_2_iteration"], 1.5)
+    check("fitted contention of the set-up", of["contention_2_setup"], 1.25)
+    check("fitted overhead, latencies off", of["per_level_neighbour_iteration_s"],
+          o_it - 8e-6 - 0.5 * (3e-6 / 13 + 3e-6 / 16))
+    check("fitted set-up overhead", of["per_level_neighbour_setup_s"], o_su - 2e-6)
+    check("solve's memory share from the cubes", cf["memory_share"]["pressure_solve"], 0.5)
+    check("set-up's memory share from the cubes", cf["memory_share"]["pressure_setup"], 0.25)
+    check("fluid's memory share still the co-run's", cf["memory_share"]["fluid"], 0.5)
+
+    # --- the machine's noise: quantiles 0.9, 1.0, 1.1 (equal weights): E[max of 2] =
+    # (0.9 + 3 x 1.0 + 5 x 1.1) / 9, E[max of 4] = (0.9 + 15 x 1.0 + 65 x 1.1) / 81
+    q = [0.9, 1.0, 1.1]
+    check("E[max of 2] - mean", model.expected_max_excess(q, 2), 9.4 / 9 - 1.0)
+    check("E[max of 4] - mean", model.expected_max_excess(q, 4), 87.4 / 81 - 1.0)
+    nz = model.noise_of([
+        {"kernel": "pairs", "mib": 0, "by_ranks": [{"ranks": 2, "noise": x}],
+         "relative_time_quantiles": q} for x in (0.05, 0.02, 0.03)] + [
+        {"kernel": "triad", "mib": 48, "by_ranks": [{"ranks": 2, "noise": 0.1}],
+         "relative_time_quantiles": q}])
+    check("noise: median of the repeats", nz["compute"]["by_ranks"]["2"], 0.03)
+    check("noise: repeats", nz["compute"]["repeats"], 3)
+    check("eta(1) = 0", model.noise_eta(nz["compute"], 1), 0.0)
+    check("eta(2) measured", model.noise_eta(nz["compute"], 2), 0.03)
+    check("eta(4) extrapolated", model.noise_eta(nz["compute"], 4),
+          0.03 * (87.4 / 81 - 1) / (9.4 / 9 - 1))
+
     # --- the median of repeats: the benchmarks' repetitions (1.7, 1.0, 1.3: median 1.3, min
     # 1.0), and one calibration a 1-rank run, each input the median over them
     pm = model.bench_points(fv(1, 1e-3, 10e-3), True, "median")[("cube", 16, 16, 16)]
@@ -166,6 +222,22 @@ def main():
     check("2 rank step", p2["step_s"], fluid + setup + solve + cpl)
     check("2 rank coupling share", p2["coupling"], cpl / (fluid + setup + solve + cpl))
     check("2 rank contention", p2["memory_contention"], 2.0)
+
+    # --- with the machine's noise: eta(2) = 0.04 (compute), 0.10 (memory); each group's eta
+    # mixes them by its memory share (fluid 0.5: 0.07; solve 1: 0.10; set-up 0: 0.04; coupling
+    # 0: 0.04). The solve's and set-up's extra time is fluid time, the rest is wait.
+    profn = dict(prof, noise={"compute": {"by_ranks": {"2": 0.04}, "quantiles": []},
+                              "memory": {"by_ranks": {"2": 0.10}, "quantiles": []}})
+    pn = model.predict_layout(c, layout(2), profn)
+    psetup = 500 * 4e-7 + 13 * ov["per_level_neighbour_setup_s"]
+    psolve = 2 * (500 * 1e-7 * 2 + 13 * ov["per_level_neighbour_iteration_s"])
+    in_solve = 0.04 * psetup + 0.10 * psolve
+    at_barriers = 0.07 * fluid + 0.04 * cpl
+    stepn = fluid + setup + solve + cpl + in_solve + at_barriers
+    check("noise: step", pn["step_s"], stepn)
+    check("noise: wait", pn["wait"], at_barriers / stepn)
+    check("noise: fluid share", pn["fluid"], (fluid + setup + solve + in_solve) / stepn)
+    check("noise: none at 1 rank", model.predict_layout(c, layout(1), profn)["step_s"], 0.0017)
 
     # --- validate: a 2-rank point 5 % off passes, 25 % off fails (--strict exit code)
     base = tempfile.mkdtemp(prefix="coloc-model-test-")

@@ -5,9 +5,12 @@ For each case (default case2-small and case3-small) it runs, --repeats times eac
   np1        mpirun -n 1 coloc run CASE                      (the calibration)
   np1corun   the same beside one `bench_stream --co-run`      (memory-bound shares)
   np2        mpirun -n 2 coloc run CASE                      (the point to predict)
-and once: bench_stream on every core (memory contention), bench_fv BM_PressureSolve/{32,64}/0
-and BM_PressureSolveBox on the small cases' grids
-on 1 and 2 ranks (hypre's per-level overhead), `coloc plan CASE --ranks 1,2`. It takes the
+and once: bench_stream on every core (memory contention), bench_pingpong (the network, --repeats
+times, median; --no-pingpong: --pingpong's file), bench_fv BM_PressureSolve/{32,64}/0 and
+BM_PressureSolveBox on the small cases' grids on 1 and 2 ranks (hypre's per-level overhead and
+the solve's contention, fitted together from the two cubes), `coloc plan CASE --ranks 1,2`; and
+before each repeat's runs bench_noise (the cores' uneven speed on the same work: a pair loop and
+a triad at the stream working set; --no-noise: neither measured nor modelled). It takes the
 median of each set (--pick median, the default: one calibration from each 1-rank run and its
 co-run, every input the median over the repeats, bench_stream run --repeats times and
 bench_fv's repetitions by their median too; --pick min: the fastest run of each), calibrates from
@@ -25,9 +28,9 @@ Writes OUT/validate-CASE.{csv,txt} and OUT/validate-costs-CASE.json.
   bench/scripts/validate_model.py --reports DIR        # takes DIR's reports, runs nothing
   --timer busy|wall   busy (thread-CPU; default, for a loaded machine) or wall (a quiet one)
 
-DIR layout (what a run leaves under --runs): stream-I.json (or stream.json), pfmg-np1.json,
-pfmg-np2.json,
-CASE/plan/plan.json, CASE/{np1,np1corun,np2}-I/report.json.
+DIR layout (what a run leaves under --runs): stream-I.json (or stream.json), pingpong-I.json
+(optional), pfmg-np1.json, pfmg-np2.json, CASE/plan/plan.json, CASE/noise-{pairs,triad}-I.json
+(optional), CASE/{np1,np1corun,np2}-I/report.json.
 """
 import argparse
 import glob
@@ -80,6 +83,13 @@ def run_all(a, runs):
            os.path.join(runs, "stream-%d.log" % i))
     with open(os.path.join(runs, "stream.json"), "w") as f:
         json.dump(stream_of(runs), f, indent=1)
+    mib = model.stream_memory(load(os.path.join(runs, "stream.json")))["size_mib"]
+    if a.measure_pingpong:
+        for i in range(a.repeats):
+            print("measuring the ping-pong %d/%d ..." % (i + 1, a.repeats), flush=True)
+            sh(mpirun(2) + [os.path.join(bench, "bench_pingpong"), "--json",
+                            os.path.join(runs, "pingpong-%d.json" % i)],
+               os.path.join(runs, "pingpong-%d.log" % i))
     fv = os.path.join(bench, "bench_fv")
     if os.path.exists(fv):
         for n in (1, 2):
@@ -99,6 +109,12 @@ def run_all(a, runs):
         if a.timer_sync:  # the wait for the slowest rank booked to `sync` (fractions.wait)
             extra += ["--set", "run.timer_sync=true"]
         for i in range(a.repeats):
+            if a.noise:  # the machine's noise just before the runs of this repeat
+                for kern in ("pairs", "triad"):
+                    sh(mpirun(max(a.ranks)) + [os.path.join(bench, "bench_noise"), "--kernel",
+                                               kern, "--mib", str(mib), "--json",
+                                               os.path.join(d, "noise-%s-%d.json" % (kern, i))],
+                       os.path.join(d, "noise-%s-%d.log" % (kern, i)))
             for kind in ["np1", "np1corun"] + ["np%d" % P for P in a.ranks]:
                 out = os.path.join(d, "%s-%d" % (kind, i))
                 print("%s %s %d/%d  (%s)" % (name, kind, i + 1, a.repeats, uptime()), flush=True)
@@ -106,7 +122,6 @@ def run_all(a, runs):
                 cmd = mpirun(nr) + [a.coloc, "run", case, "--out", out] + extra
                 co = None
                 if kind == "np1corun":
-                    mib = model.stream_memory(load(os.path.join(runs, "stream.json")))["size_mib"]
                     co = subprocess.Popen(mpirun(1) + [os.path.join(bench, "bench_stream"),
                                                        "--co-run", "3600", "--mib", str(mib)],
                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -195,7 +210,12 @@ def validate_case(a, runs, case, out_dir):
                          ("/np".join(str(P) for P in a.ranks), d))
     key = "busy_avg" if a.timer == "busy" else "avg"
     stream = stream_of(runs)
-    pp = load(a.pingpong)
+    pps = sorted(glob.glob(os.path.join(runs, "pingpong-[0-9]*.json")))
+    pp = model.median_of([load(p) for p in pps]) if pps else load(a.pingpong)
+    pp_path = os.path.join(runs, "pingpong-median.json") if pps else a.pingpong
+    if pps:
+        with open(pp_path, "w") as f:
+            json.dump(pp, f, indent=1)
     p1 = os.path.join(runs, "pfmg-np1.json")
     p2 = os.path.join(runs, "pfmg-np2.json")
     have_fv = os.path.exists(p1) and os.path.exists(p2)
@@ -211,7 +231,10 @@ def validate_case(a, runs, case, out_dir):
     src = costs["source"]
     if os.path.isabs(src) and "/bench/cases/" in src:  # reports of runs made from a checkout
         costs["source"] = "bench/cases/" + src.split("/bench/cases/")[-1]
-    prof = model.profile(a.pingpong, stream)
+    prof = model.profile(pp_path, stream)
+    noises = sorted(glob.glob(os.path.join(d, "noise-*-*.json")))
+    if noises and a.noise:
+        prof["noise"] = model.noise_of([load(p) for p in noises])
     plan = load(os.path.join(d, "plan", "plan.json"))
     rows, lines = [], []
     lines.append("MODEL VALIDATION %s, timer %s, %d repeat(s), %s of each, calibrated on 1 rank%s"
@@ -227,6 +250,15 @@ def validate_case(a, runs, case, out_dir):
                  % (costs["pressure_iterations_per_step"], costs["pressure_setups_per_step"],
                     ov["per_level_neighbour_iteration_s"], ov["per_level_neighbour_setup_s"],
                     ov.get("from", "none")))
+    lines.append("network: latency %.3g s, bandwidth %.3g B/s (ping-pong, %s)"
+                 % (pp["latency_s"], pp["bandwidth_Bps"],
+                    "median of %d during the runs" % len(pps) if pps else a.pingpong))
+    nz = prof.get("noise")
+    lines.append("noise: %s" % ("none (not measured: --no-noise)" if not nz else ", ".join(
+        "%s eta(%s) = %.4f (bench_noise %s, median of %d)" % (
+            k, kk, v, "pair loop" if k == "compute" else "triad %.0f MiB" % nz[k]["mib"],
+            nz[k]["repeats"]) for k in ("compute", "memory") if k in nz
+        for kk, v in sorted(nz[k]["by_ranks"].items()))))
     lines.append("%-6s %-14s %11s %11s %9s  %s" % ("ranks", "quantity", "model", "measured",
                                                   "error", "verdict"))
     ok_all = True
@@ -295,6 +327,11 @@ def main():
     ap.add_argument("--no-timer-sync", dest="timer_sync", action="store_false",
                     help="run without run.timer_sync (the wait for the slowest rank is then "
                     "booked to the collective phase that follows it)")
+    ap.add_argument("--no-noise", dest="noise", action="store_false",
+                    help="neither measure nor model the machine's noise (bench_noise: the "
+                    "spread of the cores' speed on the same work, before each repeat's runs)")
+    ap.add_argument("--no-pingpong", dest="measure_pingpong", action="store_false",
+                    help="take --pingpong instead of measuring it --repeats times")
     ap.add_argument("--runs", default="/tmp/coloc-validate")
     ap.add_argument("--reports", help="take the reports under this folder; run nothing")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench/results/model"))
