@@ -36,6 +36,7 @@ import argparse
 import glob
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -121,7 +122,19 @@ def run_all(a, runs):
                 nr = 1 if kind.startswith("np1") else int(kind[2:])
                 cmd = mpirun(nr) + [a.coloc, "run", case, "--out", out] + extra
                 co = None
-                if kind == "np1corun":
+                if kind == "np1corun" and a.corunner == "self":
+                    # the same 1-rank run on the other core, over and over until this one ends;
+                    # then the loop stops after its current run (killing mpirun would orphan
+                    # the coloc it started, which would run on beside the next runs)
+                    partner = " ".join(shlex.quote(x) for x in mpirun(1) + [
+                        a.coloc, "run", case, "--out", out + "-partner"] + extra)
+                    stop = shlex.quote(out + "-partner.stop")
+                    co = subprocess.Popen(["bash", "-c", "rm -f %s; while [ ! -e %s ]; do %s; "
+                                           "done" % (stop, stop, partner)],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                          start_new_session=True, cwd=ROOT)
+                    time.sleep(0.5)  # past its set-up
+                elif kind == "np1corun":
                     co = subprocess.Popen(mpirun(1) + [os.path.join(bench, "bench_stream"),
                                                        "--co-run", "3600", "--mib", str(mib)],
                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -130,7 +143,10 @@ def run_all(a, runs):
                 try:
                     sh(cmd, out + ".log")
                 finally:
-                    if co is not None:
+                    if co is not None and kind == "np1corun" and a.corunner == "self":
+                        open(out + "-partner.stop", "w").close()
+                        co.wait()
+                    elif co is not None:
                         os.killpg(co.pid, signal.SIGTERM)
                         co.wait()
 
@@ -330,6 +346,10 @@ def main():
     ap.add_argument("--no-noise", dest="noise", action="store_false",
                     help="neither measure nor model the machine's noise (bench_noise: the "
                     "spread of the cores' speed on the same work, before each repeat's runs)")
+    ap.add_argument("--corunner", choices=["stream", "self"], default="stream",
+                    help="the co-runner of the memory-share calibration: bench_stream at the "
+                    "most contended working set (default), or the same 1-rank run on the other "
+                    "core (self)")
     ap.add_argument("--no-pingpong", dest="measure_pingpong", action="store_false",
                     help="take --pingpong instead of measuring it --repeats times")
     ap.add_argument("--runs", default="/tmp/coloc-validate")
