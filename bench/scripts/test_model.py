@@ -242,8 +242,12 @@ def main():
     # --- validate: a 2-rank point 5 % off passes, 25 % off fails (--strict exit code)
     base = tempfile.mkdtemp(prefix="coloc-model-test-")
     try:
-        for off, want_rc in ((1.05, 0), (1.25, 1)):
-            d = os.path.join(base, "x%.2f" % off)
+        # the third: with the machine's noise (bench_noise files, eta 0.05 for both kernels) and
+        # the ping-pong measured with the runs (pingpong-0.json; --pingpong then names a file
+        # 1000x slower, which must not be read): the model adds 0.05 x (set-up + solve) to the
+        # fluid and 0.05 x (fluid + coupling) as wait, and the synthetic run holds exactly that
+        for off, want_rc, noisy in ((1.05, 0, False), (1.25, 1, False), (1.0, 0, True)):
+            d = os.path.join(base, "x%.2f%s" % (off, "-noise" if noisy else ""))
             os.makedirs(os.path.join(d, "synthetic", "plan"))
             with open(os.path.join(d, "stream.json"), "w") as f:
                 json.dump(stream, f)
@@ -251,15 +255,27 @@ def main():
                 json.dump({"layouts": [layout(1), layout(2)]}, f)
             pp = os.path.join(d, "pingpong.json")
             with open(pp, "w") as f:
-                json.dump({"latency_s": 1e-6, "bandwidth_Bps": 1e9}, f)
+                json.dump({"latency_s": 1e-3 if noisy else 1e-6, "bandwidth_Bps": 1e9}, f)
+            in_solve = at_barriers = 0.0
+            if noisy:
+                with open(os.path.join(d, "pingpong-0.json"), "w") as f:
+                    json.dump({"latency_s": 1e-6, "bandwidth_Bps": 1e9}, f)
+                for kern in ("pairs", "triad"):
+                    with open(os.path.join(d, "synthetic", "noise-%s-0.json" % kern), "w") as f:
+                        json.dump({"kernel": kern, "mib": 1.0, "relative_time_quantiles": q,
+                                   "by_ranks": [{"ranks": 2, "noise": 0.05}]}, f)
+                in_solve = 0.05 * (500 * 4e-7 + 2 * 500 * 1e-7 * 2)
+                at_barriers = 0.05 * (500 * 1e-6 * 1.5 + cpl)
             # no bench_fv files here: the overhead is 0; predicted 2-rank step by hand
             want = (500 * 1e-6 * 1.5 + 500 * 4e-7 + 13 * 2 * 1e-6 +
-                    2 * (500 * 1e-7 * 2 + 92 * 1e-6 + 3e-6 + 16 * 800 / 1e9) + cpl)
+                    2 * (500 * 1e-7 * 2 + 92 * 1e-6 + 3e-6 + 16 * 800 / 1e9) + cpl +
+                    in_solve + at_barriers)
             two = {g: 0.0 for g in alone}
-            two["fluid"] = (want - cpl) * off * 10
+            two["fluid"] = (want - cpl - at_barriers) * off * 10
             two["coupling"] = cpl * off * 10
+            np2 = report(10, two, ranks=2, busy_max=want * off * 10)
             for k, r in (("np1-0", report(10, alone)), ("np1corun-0", report(10, co)),
-                         ("np2-0", report(10, two, ranks=2))):
+                         ("np2-0", np2)):
                 os.makedirs(os.path.join(d, "synthetic", k))
                 with open(os.path.join(d, "synthetic", k, "report.json"), "w") as f:
                     json.dump(r, f)
@@ -275,6 +291,13 @@ def main():
             err = float(line.split()[4].rstrip("%"))
             if abs(err - 100 * (1 / off - 1)) > 0.06:  # printed to 0.1 %
                 FAILS.append("validate step error x%.2f: %g %%" % (off, err))
+            if noisy:
+                wl = [x for x in txt.splitlines() if x.startswith("2 ") and " wait " in x][0]
+                if abs(float(wl.split()[2].rstrip("%")) - 100 * at_barriers / want) > 0.06 or \
+                        abs(float(wl.split()[4].rstrip("pt"))) > 0.06:
+                    FAILS.append("validate with noise, the wait: %s" % wl)
+                if "median of 1 during the runs" not in txt or "eta(2) = 0.0500" not in txt:
+                    FAILS.append("validate with noise: ping-pong or noise not read\n" + txt)
     finally:
         shutil.rmtree(base)
     if FAILS:
