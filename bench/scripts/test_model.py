@@ -124,6 +124,19 @@ def main():
     check("default: the cubes", cc["pressure_overhead"]["per_level_neighbour_iteration_s"],
           o_it - 8e-6 - 3e-6 / 13)
 
+    # --- a restarted run (first_step 600, 10 steps timed): its counters (steps, DEM sub-steps,
+    # pressure set-ups) count from the original start, its timers its own 10 steps; per step
+    # the same as a fresh run's
+    rr = report(10, dict(alone, dem=0.002))
+    rr["run"].update(steps=610, first_step=600, dem_substeps=6100)
+    rr["pressure"]["setups"] = 610
+    rr["particles"]["frozen"] = False
+    cr = model.calibrate(rr, "busy_avg")
+    check("restart: set-ups a step", cr["pressure_setups_per_step"], 1.0)
+    check("restart: DEM per particle-sub-step", cr["dem_per_particle_substep"],
+          0.002 / (100 * 100))
+    check("restart: fluid per cell-step", cr["fluid_per_cell_step"], 0.010 / 10000)
+
     # --- contention and overhead fitted together from cubes of two sizes: 16^3 (levels 13) and
     # 32^3 (levels 16), exact data made with f = 1.5 and o = 10 us (an iteration), f = 1.25 and
     # o = 20 us (a set-up): the fit returns them exactly; c(2) = 2 gives the solve's memory share

@@ -26,6 +26,8 @@ Writes OUT/validate-CASE.{csv,txt} and OUT/validate-costs-CASE.json.
 
   bench/scripts/validate_model.py                      # runs everything (a few minutes, quiet)
   bench/scripts/validate_model.py --reports DIR        # takes DIR's reports, runs nothing
+  validate_model.py --cases bench/cases/case3-small.json --restart SETTLED.h5
+      --settled-steps 200 --steps 10     # a bed in contact (contact_bench.py --settle-only)
   --timer busy|wall   busy (thread-CPU; default, for a loaded machine) or wall (a quiet one)
 
 DIR layout (what a run leaves under --runs): stream-I.json (or stream.json), pingpong-I.json
@@ -106,7 +108,9 @@ def run_all(a, runs):
         sh([a.coloc, "plan", case, "--ranks", ",".join(str(P) for P in [1] + a.ranks),
             "--strategy", "uniform", "--out",
             os.path.join(d, "plan")], os.path.join(d, "plan.log"))
-        extra = ["--set", "run.steps=%d" % a.steps] if a.steps else []
+        extra = ["--set", "run.steps=%d" % (a.settled_steps + a.steps)] if a.steps else []
+        if a.restart:  # every run continues from the same checkpoint (e.g. a settled bed)
+            extra = ["--restart", os.path.abspath(a.restart)] + extra
         if a.timer_sync:  # the wait for the slowest rank booked to `sync` (fractions.wait)
             extra += ["--set", "run.timer_sync=true"]
         for i in range(a.repeats):
@@ -200,7 +204,7 @@ def measured_shares(r, timer):
     st = busy_step(r)
     out = {"fluid": b(sum([model.GROUPS[g] for g in ("fluid", "pressure_setup", "pressure_solve")],
                           []) + ["fluid_halo"]),
-           "dem": b(model.GROUPS["dem"] + ["dem_ghost", "dem_migrate"]),
+           "dem": b(model.GROUPS["dem"] + ["dem_ghost"]),
            "coupling": b(model.GROUPS["coupling"]),
            "inter_physics": b(["exchange_local", "exchange_remote"])}
     out = {k: v / st for k, v in out.items()}
@@ -332,6 +336,12 @@ def main():
     ap.add_argument("--ranks", default="2", help="rank counts to predict, e.g. 2,4,8,16 (1 is "
                     "always run: the calibration)")
     ap.add_argument("--steps", type=int, default=0, help="override run.steps (0: the case's)")
+    ap.add_argument("--restart", help="every run (1 and 2 ranks, the co-run) continues from this "
+                    "checkpoint, e.g. a settled bed (contact_bench.py --settle-only); needs "
+                    "--steps (the timed steps) and --settled-steps (the checkpoint's step); one "
+                    "case")
+    ap.add_argument("--settled-steps", type=int, default=0,
+                    help="with --restart: the step the checkpoint was written at")
     ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
     ap.add_argument("--timer", choices=["busy", "wall"], default="busy")
     ap.add_argument("--overhead-grid", choices=["cubes", "own"], default="cubes",
@@ -358,6 +368,8 @@ def main():
     ap.add_argument("--strict", action="store_true", help="exit 1 when a 2-rank point fails")
     a = ap.parse_args()
     a.ranks = [int(x) for x in a.ranks.split(",") if int(x) > 1]
+    if a.restart and (not a.steps or not a.settled_steps or len(a.cases) != 1):
+        ap.error("--restart needs --steps, --settled-steps and one case")
     before = uptime()
     runs = os.path.abspath(a.reports or a.runs)
     a.coloc, a.bench, a.pingpong = (os.path.abspath(x) for x in (a.coloc, a.bench, a.pingpong))
