@@ -29,6 +29,8 @@
 #include <string>
 #include <vector>
 
+#include "proc_load.hpp"
+
 namespace {
 
 struct Work {
@@ -81,13 +83,6 @@ long long stealOf(int cpu) {
     return v[7];
   }
   return -1;
-}
-
-std::string loadavg() {
-  std::ifstream f("/proc/loadavg");
-  std::string l;
-  std::getline(f, l);
-  return l;
 }
 
 }  // namespace
@@ -191,7 +186,7 @@ int main(int argc, char** argv) {
     js << "{\n \"benchmark\": \"bench_noise\",\n \"ranks\": " << size
        << ",\n \"intervals\": " << intervals << ",\n \"interval_ms\": " << intervalMs
        << ",\n \"kernel\": \"" << kind << "\",\n \"mib\": " << (kind == "pairs" ? 0.0 : mib)
-       << ",\n \"wall_s\": " << wall << ",\n \"loadavg\": \"" << loadavg()
+       << ",\n \"wall_s\": " << wall << ",\n \"loadavg\": \"" << coloc::bench::loadavg()
        << "\",\n \"by_ranks\": [";
     std::printf(
         "bench_noise: %d ranks, %d intervals of %.2f ms (kernel %s, triad %.2f MiB), "

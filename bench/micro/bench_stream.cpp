@@ -16,9 +16,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
-#include <fstream>
 #include <string>
 #include <vector>
+
+#include "proc_load.hpp"
 
 namespace {
 
@@ -35,13 +36,6 @@ double cpuSeconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
-std::string loadavg() {
-  std::ifstream f("/proc/loadavg");
-  std::string l;
-  std::getline(f, l);
-  return l;
 }
 
 }  // namespace
@@ -121,11 +115,11 @@ int main(int argc, char** argv) {
         std::printf("%10.1f %8d %16.3f %16.3f %12.3f %8d\n", mib[si], k, perRank[si][k - 1] / 1e9,
                     k * perRank[si][k - 1] / 1e9, perRank[si][0] / perRank[si][k - 1],
                     validTrials[si][k - 1]);
-    std::printf("load: %s\n", loadavg().c_str());
+    std::printf("load: %s\n", coloc::bench::loadavg().c_str());
     if (!json.empty()) {
       if (FILE* f = std::fopen(json.c_str(), "w")) {
         std::fprintf(f, "{\n \"kernel\": \"triad, 24 B an element\",\n \"loadavg\": \"%s\",\n",
-                     loadavg().c_str());
+                     coloc::bench::loadavg().c_str());
         std::fprintf(f, " \"ranks\": %d,\n \"sizes_mib\": [", size);
         for (std::size_t si = 0; si < mib.size(); ++si)
           std::fprintf(f, "%s%.1f", si ? ", " : "", mib[si]);
