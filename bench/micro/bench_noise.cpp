@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
   const int cpu = sched_getcpu();
   const long long steal0 = stealOf(cpu);
   const double wall0 = MPI_Wtime();
-  // times[k][i * size + r]: rank r's work in interval i with k ranks working (r < k).
+  // times[k][r * intervals + i]: rank r's work in interval i with k ranks working (r < k).
   std::vector<std::vector<double>> times(size + 1);
   for (int k = std::min(2, size); k <= size; ++k) {
     std::vector<double> mine(intervals, 0.0);
@@ -168,13 +168,9 @@ int main(int argc, char** argv) {
       }
       MPI_Barrier(MPI_COMM_WORLD);
     }
-    std::vector<double> all(static_cast<std::size_t>(intervals) * size);
-    std::vector<double> byRank(static_cast<std::size_t>(intervals) * size);
-    MPI_Gather(mine.data(), intervals, MPI_DOUBLE, byRank.data(), intervals, MPI_DOUBLE, 0,
+    times[k].assign(static_cast<std::size_t>(intervals) * size, 0.0);
+    MPI_Gather(mine.data(), intervals, MPI_DOUBLE, times[k].data(), intervals, MPI_DOUBLE, 0,
                MPI_COMM_WORLD);
-    for (int r = 0; r < size; ++r)
-      for (int i = 0; i < intervals; ++i) all[i * size + r] = byRank[r * intervals + i];
-    times[k] = std::move(all);
   }
   const double wall = MPI_Wtime() - wall0;
   const long long steal1 = stealOf(cpu);
@@ -199,7 +195,7 @@ int main(int argc, char** argv) {
       for (int i = 0; i < intervals; ++i) {
         double mx = 0, mean = 0;
         for (int r = 0; r < k; ++r) {
-          const double t = times[k][i * size + r];
+          const double t = times[k][r * intervals + i];
           mx = std::max(mx, t);
           mean += t / k;
         }
@@ -231,7 +227,7 @@ int main(int argc, char** argv) {
     js << "],\n \"per_rank\": [";
     for (int r = 0; r < size; ++r) {
       double sum = 0;
-      for (int i = 0; i < intervals; ++i) sum += t[i * size + r];
+      for (int i = 0; i < intervals; ++i) sum += t[r * intervals + i];
       js << (r ? ", " : "") << "{\"rank\": " << r << ", \"cpu\": " << steals[2 * r]
          << ", \"mean_work_s\": " << sum / intervals << ", \"steal_jiffies\": " << steals[2 * r + 1]
          << "}";
