@@ -388,11 +388,15 @@ def noise_eta(spec, P):
 
 
 def profile(spec, stream=None):
-    if spec in PROFILES:
+    """A network profile: a name of PROFILES, or this machine's ping-pong (bench_pingpong's JSON,
+    as a path or as the loaded dict)."""
+    if isinstance(spec, str) and spec in PROFILES:
         prof = dict(PROFILES[spec], name=spec)
     else:
-        with open(spec) as f:
-            p = json.load(f)
+        p = spec
+        if not isinstance(spec, dict):
+            with open(spec) as f:
+                p = json.load(f)
         # this machine: the measured ping-pong, all ranks on one node (shared memory)
         prof = {"latency_s": p["latency_s"], "bandwidth_Bps": p["bandwidth_Bps"],
                 "ranks_per_node": 1, "memory_Bps": p["bandwidth_Bps"], "name": "this machine",

@@ -93,6 +93,8 @@ def run_all(a, runs):
             sh(mpirun(2) + [os.path.join(bench, "bench_pingpong"), "--json",
                             os.path.join(runs, "pingpong-%d.json" % i)],
                os.path.join(runs, "pingpong-%d.log" % i))
+        with open(os.path.join(runs, "pingpong-median.json"), "w") as f:
+            json.dump(pingpong_of(runs, a.pingpong)[0], f, indent=1)
     fv = os.path.join(bench, "bench_fv")
     if os.path.exists(fv):
         for n in (1, 2):
@@ -169,6 +171,15 @@ def stream_of(runs):
     return model.median_stream([load(p) for p in reps])
 
 
+def pingpong_of(runs, fallback):
+    """The network of the runs: the median of pingpong-I.json (one a repeat), or the file
+    --pingpong names where the runs measured none; and where it came from."""
+    reps = sorted(glob.glob(os.path.join(runs, "pingpong-[0-9]*.json")))
+    if not reps:
+        return load(fallback), fallback
+    return model.median_of([load(p) for p in reps]), "median of %d during the runs" % len(reps)
+
+
 def steps_of(r):
     return r["run"]["steps"] - r["run"].get("first_step", 0)
 
@@ -230,12 +241,7 @@ def validate_case(a, runs, case, out_dir):
                          ("/np".join(str(P) for P in a.ranks), d))
     key = "busy_avg" if a.timer == "busy" else "avg"
     stream = stream_of(runs)
-    pps = sorted(glob.glob(os.path.join(runs, "pingpong-[0-9]*.json")))
-    pp = model.median_of([load(p) for p in pps]) if pps else load(a.pingpong)
-    pp_path = os.path.join(runs, "pingpong-median.json") if pps else a.pingpong
-    if pps:
-        with open(pp_path, "w") as f:
-            json.dump(pp, f, indent=1)
+    pp, pp_from = pingpong_of(runs, a.pingpong)
     p1 = os.path.join(runs, "pfmg-np1.json")
     p2 = os.path.join(runs, "pfmg-np2.json")
     have_fv = os.path.exists(p1) and os.path.exists(p2)
@@ -251,7 +257,7 @@ def validate_case(a, runs, case, out_dir):
     src = costs["source"]
     if os.path.isabs(src) and "/bench/cases/" in src:  # reports of runs made from a checkout
         costs["source"] = "bench/cases/" + src.split("/bench/cases/")[-1]
-    prof = model.profile(pp_path, stream)
+    prof = model.profile(pp, stream)
     noises = sorted(glob.glob(os.path.join(d, "noise-*-*.json")))
     if noises and a.noise:
         prof["noise"] = model.noise_of([load(p) for p in noises])
@@ -271,8 +277,7 @@ def validate_case(a, runs, case, out_dir):
                     ov["per_level_neighbour_iteration_s"], ov["per_level_neighbour_setup_s"],
                     ov.get("from", "none")))
     lines.append("network: latency %.3g s, bandwidth %.3g B/s (ping-pong, %s)"
-                 % (pp["latency_s"], pp["bandwidth_Bps"],
-                    "median of %d during the runs" % len(pps) if pps else a.pingpong))
+                 % (pp["latency_s"], pp["bandwidth_Bps"], pp_from))
     nz = prof.get("noise")
     lines.append("noise: %s" % ("none (not measured: --no-noise)" if not nz else ", ".join(
         "%s eta(%s) = %.4f (bench_noise %s, median of %d)" % (
