@@ -84,9 +84,10 @@ def run_all(a, runs):
         sh(mpirun(ncores) + [os.path.join(bench, "bench_stream"), "--json",
                              os.path.join(runs, "stream-%d.json" % i)],
            os.path.join(runs, "stream-%d.log" % i))
+    stream = stream_of(runs)
     with open(os.path.join(runs, "stream.json"), "w") as f:
-        json.dump(stream_of(runs), f, indent=1)
-    mib = model.stream_memory(load(os.path.join(runs, "stream.json")))["size_mib"]
+        json.dump(stream, f, indent=1)
+    mib = model.stream_memory(stream)["size_mib"]
     if a.measure_pingpong:
         for i in range(a.repeats):
             print("measuring the ping-pong %d/%d ..." % (i + 1, a.repeats), flush=True)
