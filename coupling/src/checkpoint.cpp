@@ -332,6 +332,12 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
           {std::span<const double>(c[0].data(), n), std::span<const double>(c[1].data(), n),
            std::span<const double>(c[2].data(), n)});
   });
+  // the positions of the last neighbour rebuild (the restore redoes it there); a raw state (at a
+  // failure) has none, and a restore then rebuilds at x
+  const bool x0 = std::all_of(s.xRebuild.begin(), s.xRebuild.end(),
+                              [&](const auto& c) { return c.size() == n; });
+  if (file.comm().min(x0 ? 1LL : 0LL) == 1)
+    writeParticleVec3(file, group + "/x_rebuild", firstRows(s.xRebuild, n));
   const RowRange rows = rowsOf(file.comm(), static_cast<long long>(n));
   file.setAttribute(group, "count", rows.total);
   file.setAttribute(group, "time", s.time);
@@ -388,6 +394,11 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
       for (int k = 0; k < 3; ++k) c[k] = std::move(v[static_cast<std::size_t>(k)]);
     }
   });
+  if (file.exists(group + "/x_rebuild")) {
+    auto v = readParticleVec3(file, group + "/x_rebuild", r);
+    for (int k = 0; k < 3; ++k)
+      s.xRebuild[static_cast<std::size_t>(k)] = std::move(v[static_cast<std::size_t>(k)]);
+  }
   s.time = file.attributeDouble(group, "time");
   s.steps = file.attributeInt(group, "steps");
   s.rebuilds = file.attributeInt(group, "rebuilds");
@@ -441,6 +452,9 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
       for (const auto* a : {&p.v, &p.omega, &p.f, &p.torque, &p.fExt})
         if (!std::isfinite((*a)[d][i]))
           bad("v, omega, f, torque, f_ext", i, "has a value that is not finite");
+      const auto& x0 = s.xRebuild[static_cast<std::size_t>(d)];
+      if (i < x0.size() && !std::isfinite(x0[i]))
+        bad("x_rebuild", i, "has a rebuild position that is not finite");
     }
   }
   // Ids unique over all ranks, and every contact history held by (and pointing at) an existing

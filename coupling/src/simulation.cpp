@@ -587,10 +587,10 @@ void Simulation::advanceParticles(int n) {
 // ---- checkpoints (the file format: coupling/checkpoint.hpp) ----------------------------------
 
 void Simulation::writeCheckpoint(const std::string& path, const std::string& status) {
-  // The DEM's canonical snapshot first (it rebuilds the neighbour structures); at a failure the
-  // particles as they are if the snapshot itself fails (a particle outside the box, say).
+  // The DEM's state first (taken without changing the solver); at a failure the particles as
+  // they are if taking it fails.
   std::optional<dem::DemState> demState;
-  std::string demSnapshot = "canonical";
+  std::string demSnapshot = "complete";
   if (dem_) {
     if (status == "ok") {
       demState = dem_->saveState();

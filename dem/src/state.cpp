@@ -183,27 +183,58 @@ void DemSolver::Impl::restore(DemState& st) {
     err =
         "the restored state's extra particle fields differ between the ranks or from the solver's";
   comm.raiseIfAny(err);
+  // The position of the last rebuild (x0) of each row: where the run that saved built its
+  // blocks' particles, bins, ghosts and lists; the current x when the state has none.
+  const bool withX0 = std::all_of(st.xRebuild.begin(), st.xRebuild.end(),
+                                  [&](const auto& c) { return c.size() == q.nOwned; });
+  if (!withX0 && std::any_of(st.xRebuild.begin(), st.xRebuild.end(),
+                             [](const auto& c) { return !c.empty(); }))
+    err = "the restored state's rebuild positions (x_rebuild) do not match its particles";
+  const auto x0 = [&](std::size_t i, int d) {
+    return withX0 ? st.xRebuild[static_cast<std::size_t>(d)][i] : q.x[d][i];
+  };
+  for (std::size_t i = 0; i < q.nOwned && err.empty(); ++i)
+    for (int d = 0; d < 3; ++d)
+      if (!std::isfinite(x0(i, d))) {
+        err = "restored particle " + std::to_string(q.id[i]) + " has a rebuild position " +
+              "(x_rebuild) that is not finite";
+        break;
+      }
+  comm.raiseIfAny(err);
   std::vector<int> dest(q.nOwned);
   std::vector<int> place(q.nOwned);  // row i's place among the rows sent to dest[i]
   {
     std::vector<int> sent(static_cast<std::size_t>(P), 0);
     for (std::size_t i = 0; i < q.nOwned; ++i) {
-      const double xi[3] = {q.x[0][i], q.x[1][i], q.x[2][i]};
+      const double xi[3] = {x0(i, 0), x0(i, 1), x0(i, 2)};
       dest[i] = ownerRank(xi);
       place[i] = sent[static_cast<std::size_t>(dest[i])]++;
     }
   }
+  // a row: the state's fields, then x0
+  const std::size_t R = W + 3;
   CommPlan plan;
-  std::vector<double> in =
-      toRanks(plan, comm, dest, static_cast<int>(W),
-              [&](std::size_t i, double* o) { detail::packRow(q, kOpState, i, nullptr, o); });
-  const std::size_t n = W > 0 ? in.size() / W : 0;
+  std::vector<double> in = toRanks(plan, comm, dest, static_cast<int>(R), [&](std::size_t i,
+                                                                              double* o) {
+    detail::packRow(q, kOpState, i, nullptr, o);
+    for (int d = 0; d < 3; ++d) o[W + static_cast<std::size_t>(d)] = x0(i, d);
+  });
+  const std::size_t n = in.size() / R;
   std::vector<int> firstRowFrom(static_cast<std::size_t>(P));  // arrived rows, rank by rank
   for (int r = 0; r < P; ++r) firstRowFrom[static_cast<std::size_t>(r)] = plan.importOffset(r);
   detail::resizeAll(p, n);
   p.nOwned = n;
   p.nGhost = 0;
-  detail::unpackRows(p, kOpState, in.data(), n, 0, true);
+  // (id, x now) of every arrived row, by id: the particles sit at x0 for the rebuild below
+  std::vector<std::pair<std::int64_t, std::array<double, 3>>> xNow(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* row = in.data() + i * R;
+    detail::unpackRow(p, kOpState, row, i, true);
+    xNow[i] = {p.id[i], {p.x[0][i], p.x[1][i], p.x[2][i]}};
+    for (int d = 0; d < 3; ++d) p.x[d][i] = row[W + static_cast<std::size_t>(d)];
+  }
+  std::sort(xNow.begin(), xNow.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t i = 0; i < n && err.empty(); ++i)
     if (p.material[i] < 0 || p.material[i] >= nMat)
       err = "restored particle " + std::to_string(p.id[i]) + " has material " +
@@ -249,13 +280,32 @@ void DemSolver::Impl::restore(DemState& st) {
     hist.hKey[e] = static_cast<double>(historyPartner(rec));
     std::copy_n(historyShear(rec), 3, &hist.hS[3 * e]);
   }
-  // 4. the canonical rebuild (same orders as the one inside saveState), no force recomputation:
-  //    the saved forces start the next velocity-Verlet half step; the force pass below only
-  //    refreshes the diagnostics (contacts, overlap) and leaves f, torque and histories as saved
+  // 4. the saving run's last rebuild, redone: at x0 the particles take the same ranks, the same
+  //    (bin, id) order, ghosts and Verlet lists (so the same sums in the same order), and x0 is
+  //    again the rebuild check's reference; then every particle moves to where it is now and the
+  //    ghosts follow. No force recomputation: the saved forces start the next velocity-Verlet
+  //    half step; the force pass below only refreshes the diagnostics (contacts, overlap) and
+  //    leaves f, torque and histories as saved
   checkTimeStep();
   rebuild(true);
   hist.compact(list.slot);  // the rows held every history twice (under both particles of a pair)
   trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
+  for (std::size_t i = 0; i < p.nOwned && err.empty(); ++i) {
+    const auto it = std::lower_bound(
+        xNow.begin(), xNow.end(), p.id[i],
+        [](const auto& e, std::int64_t id) { return e.first < id; });
+    if (it == xNow.end() || it->first != p.id[i]) {
+      err = "restored particle " + std::to_string(p.id[i]) + " left its rank at the rebuild at " +
+            "its rebuild position (x_rebuild)";
+      break;
+    }
+    for (int d = 0; d < 3; ++d) p.x[d][i] = it->second[static_cast<std::size_t>(d)];
+  }
+  comm.raiseIfAny(err);
+  {
+    ScopedPhase g(timers, Phase::DemGhost);
+    updateGhosts();
+  }
   {
     ScopedPhase f(timers, Phase::DemForce);
     std::vector<double> keep;
@@ -273,7 +323,9 @@ void DemSolver::Impl::restore(DemState& st) {
 }
 
 DemState DemSolver::Impl::save() {
-  rebuild(false);  // canonical: migration, (bin, id) order, lists; the restored run does the same
+  // The solver as it is, untouched: the particles where they are (up to skin/2 outside their
+  // block since the last rebuild), their forces, the histories of the current lists, and x0,
+  // from which restore() redoes that rebuild.
   DemState st;
   st.time = time;
   st.steps = steps;
@@ -281,6 +333,10 @@ DemState DemSolver::Impl::save() {
   st.flow = globalFlow();
   const std::size_t n = p.nOwned;
   st.particles = ownedRows(p);
+  for (int d = 0; d < 3; ++d) {
+    const double* x0 = hist.x0(d, n);
+    st.xRebuild[static_cast<std::size_t>(d)].assign(x0, x0 + n);
+  }
   // every touching history under each owned particle of the pair (a restart on other ranks may
   // separate them), as seen from that particle
   for (std::size_t q = 0; q < p.size(); ++q) {

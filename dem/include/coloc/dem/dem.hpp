@@ -102,6 +102,11 @@ struct DemState {
   /// state with it moves each history along with its holder in one exchange; without it (read
   /// from a file, or edited) the histories find their holders through a directory by id.
   std::vector<int> contactRow;
+  /// Each particle's position at the last neighbour rebuild (row for row with `particles`): the
+  /// position its rank, bin order, ghosts and Verlet list were built from, and the reference of
+  /// the rebuild check. A restore rebuilds there and then moves the particles to `x`, so the
+  /// restored run continues exactly as the one that saved. Empty (a file without it): taken as x.
+  std::array<std::vector<double>, 3> xRebuild;
   double time = 0;
   long long steps = 0, rebuilds = 0;
   DemFlow flow;  // the same on every rank
@@ -188,8 +193,9 @@ class DemSolver {
   Json diagnostics() const;
 
   // Additions beyond the coupling contract (tests, benchmarks, reports).
-  /// A canonical snapshot: forces a rebuild first (migration, bin sort, lists), so that the run
-  /// that wrote it and a run restored from it continue bitwise identically. Collective.
+  /// The complete state, taken without changing the solver (no rebuild, no migration): the run
+  /// that saved it continues exactly as if it had not, and a solver restored from it on the same
+  /// blocks continues bitwise identically (on other blocks to round-off). Collective.
   DemState saveState();
   /// Forces a neighbour rebuild now: migration, re-sort by bin, ghosts, Verlet lists. Collective.
   void rebuildNow();
