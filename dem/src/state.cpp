@@ -185,11 +185,13 @@ void DemSolver::Impl::restore(DemState& st) {
   comm.raiseIfAny(err);
   // The position of the last rebuild (x0) of each row: where the run that saved built its
   // blocks' particles, bins, ghosts and lists; the current x when the state has none.
-  const bool withX0 = std::all_of(st.xRebuild.begin(), st.xRebuild.end(),
+  const bool x0Here = std::all_of(st.xRebuild.begin(), st.xRebuild.end(),
                                   [&](const auto& c) { return c.size() == q.nOwned; });
-  if (!withX0 && std::any_of(st.xRebuild.begin(), st.xRebuild.end(),
-                             [](const auto& c) { return !c.empty(); }))
+  const bool x0Any =
+      std::any_of(st.xRebuild.begin(), st.xRebuild.end(), [](const auto& c) { return !c.empty(); });
+  if (!x0Here && x0Any)
     err = "the restored state's rebuild positions (x_rebuild) do not match its particles";
+  const bool withX0 = comm.min(x0Here ? 1LL : 0LL) == 1;
   const auto x0 = [&](std::size_t i, int d) {
     return withX0 ? st.xRebuild[static_cast<std::size_t>(d)][i] : q.x[d][i];
   };
@@ -214,11 +216,11 @@ void DemSolver::Impl::restore(DemState& st) {
   // a row: the state's fields, then x0
   const std::size_t R = W + 3;
   CommPlan plan;
-  std::vector<double> in = toRanks(plan, comm, dest, static_cast<int>(R), [&](std::size_t i,
-                                                                              double* o) {
-    detail::packRow(q, kOpState, i, nullptr, o);
-    for (int d = 0; d < 3; ++d) o[W + static_cast<std::size_t>(d)] = x0(i, d);
-  });
+  std::vector<double> in =
+      toRanks(plan, comm, dest, static_cast<int>(R), [&](std::size_t i, double* o) {
+        detail::packRow(q, kOpState, i, nullptr, o);
+        for (int d = 0; d < 3; ++d) o[W + static_cast<std::size_t>(d)] = x0(i, d);
+      });
   const std::size_t n = in.size() / R;
   std::vector<int> firstRowFrom(static_cast<std::size_t>(P));  // arrived rows, rank by rank
   for (int r = 0; r < P; ++r) firstRowFrom[static_cast<std::size_t>(r)] = plan.importOffset(r);
@@ -290,16 +292,19 @@ void DemSolver::Impl::restore(DemState& st) {
   rebuild(true);
   hist.compact(list.slot);  // the rows held every history twice (under both particles of a pair)
   trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
-  for (std::size_t i = 0; i < p.nOwned && err.empty(); ++i) {
-    const auto it = std::lower_bound(
-        xNow.begin(), xNow.end(), p.id[i],
-        [](const auto& e, std::int64_t id) { return e.first < id; });
+  for (std::size_t i = 0; i < p.nOwned && err.empty() && withX0; ++i) {
+    const auto it = std::lower_bound(xNow.begin(), xNow.end(), p.id[i],
+                                     [](const auto& e, std::int64_t id) { return e.first < id; });
     if (it == xNow.end() || it->first != p.id[i]) {
       err = "restored particle " + std::to_string(p.id[i]) + " left its rank at the rebuild at " +
             "its rebuild position (x_rebuild)";
       break;
     }
     for (int d = 0; d < 3; ++d) p.x[d][i] = it->second[static_cast<std::size_t>(d)];
+    // where it is now must be a place a step could have left it: inside the walls (a periodic
+    // axis wraps at the next rebuild)
+    for (int d = 0; d < 3 && err.empty(); ++d)
+      if (!bins.periodic[d]) (void)crossAxis(i, d, err);
   }
   comm.raiseIfAny(err);
   {

@@ -45,9 +45,9 @@ void setExternalForces(coloc::dem::ParticleStore& p) {
   for (std::size_t i = 0; i < p.nOwned; ++i) p.fExt[0][i] = 1e-5 * static_cast<double>(p.id[i] % 3);
 }
 
-constexpr int kRec = 22;
-/// Flattens a state: 22 doubles per particle (id, material, radius, mass, x, v, omega, f, torque,
-/// fExt) and 5 per history (holder, partner, shear).
+constexpr int kRec = 25;
+/// Flattens a state: 25 doubles per particle (id, material, radius, mass, x, v, omega, f, torque,
+/// fExt, the position at the last rebuild) and 5 per history (holder, partner, shear).
 void flatten(const DemState& s, std::vector<double>& parts, std::vector<double>& hist) {
   const auto& q = s.particles;
   for (std::size_t i = 0; i < q.nOwned; ++i) {
@@ -57,6 +57,7 @@ void flatten(const DemState& s, std::vector<double>& parts, std::vector<double>&
     parts.push_back(q.mass[i]);
     for (const auto* a : {&q.x, &q.v, &q.omega, &q.f, &q.torque, &q.fExt})
       for (int k = 0; k < 3; ++k) parts.push_back((*a)[k][i]);
+    for (int k = 0; k < 3; ++k) parts.push_back(s.xRebuild[static_cast<std::size_t>(k)][i]);
   }
   for (const auto& c : s.contacts) {
     hist.push_back(static_cast<double>(c.holder));
@@ -84,6 +85,7 @@ DemState unflatten(const std::vector<double>& parts, std::size_t a, std::size_t 
     int o = 4;
     for (auto* arr : {&q.x, &q.v, &q.omega, &q.f, &q.torque, &q.fExt})
       for (int k = 0; k < 3; ++k) (*arr)[k].push_back(r[o++]);
+    for (int k = 0; k < 3; ++k) s.xRebuild[static_cast<std::size_t>(k)].push_back(r[o++]);
   }
   for (std::size_t h = c; h < d; ++h) {
     ContactHistory ch;

@@ -72,7 +72,7 @@ void matchSerial(const std::string& name, const std::string& text, long n, doubl
   for (long k = 0; k < n; ++k) missing += tp[static_cast<std::size_t>(10 * k)] != 1.0;
   const long long contacts = par.dec.comm().sum(par.dem->localContacts());
   const long long contactsSer = ser.dem->localContacts();
-  // the contact histories (saveState rebuilds both runs first)
+  // the contact histories (of the current lists: both runs rebuilt at the same steps)
   const auto hp = demtest::historyTable(par, n);
   const auto hs = demtest::historyTable(ser, n);
   double smax = 0, sdiff = 0;
@@ -190,8 +190,8 @@ TEST(DemTiled, ProcessGridAsBoxesHasTheSweepsGhosts) {
 }
 
 TEST(DemTiled, RestoredOntoBoxesMatchesSerial) {
-  // the serial run's state at step 150 (rebuilt first, with its histories) given to rank 0 of
-  // the tiled layout only: the restore sends each particle and history to the owner of its box
+  // the serial run's state at step 150 (with its histories and rebuild positions) given to rank 0
+  // of the tiled layout only: the restore sends each particle and history to the owner of its box
   const long n = 300;
   Case ser(kBed, kSelf, {1, 1, 1});
   for (int s = 0; s < 150; ++s) ser.dem->substep();
@@ -201,6 +201,7 @@ TEST(DemTiled, RestoredOntoBoxesMatchesSerial) {
     st.particles = coloc::dem::ParticleStore{};
     st.contacts.clear();
     st.contactRow.clear();
+    st.xRebuild = {};
   }
   par.dem = std::make_unique<coloc::dem::DemSolver>(par.dec, par.cfg, par.timers, std::move(st));
   for (int s = 0; s < 150; ++s) {

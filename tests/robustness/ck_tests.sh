@@ -5,6 +5,9 @@
 #   readback       a checkpoint read back with h5py equals the run's regular output of that step
 #   identity NP    N+M steps with checkpoints vs a restart from step N on NP ranks: the final
 #                  checkpoints and the series.csv rows are identical, the report's physics equal
+#   interval NP S  strategy S on NP ranks, 12 steps with a checkpoint at the end only and with
+#                  one at every step: the final checkpoints identical, and so are those of
+#                  restarts from steps 5 and 9 (writing a checkpoint does not change the run)
 #   ranks          1 rank to step 12; restart on 2 ranks from step 4; on 4 ranks from step 8:
 #                  final states equal to 1e-10 (relative)
 #   kill           a run SIGKILLed while writing a checkpoint (after the data, before the rename)
@@ -83,6 +86,26 @@ case $test in
     $cmp "$work/a/ck_000010.h5" "$work/b/ck_000010.h5" || fail "final checkpoints differ"
     same_series_tail "$work/a/series.csv" "$work/b/series.csv"
     [[ $(wc -l < "$work/b/series.csv") -eq 6 ]] || fail "restart series should hold steps 6-10"
+    same_report "$work/a/report.json" "$work/b/report.json"
+    ;;
+  interval)
+    # interval NP STRATEGY: the same 12 steps with a checkpoint at the end only, and with one at
+    # every step: the final checkpoints identical (writing checkpoints does not change the run);
+    # restarts from steps 5 and 9 of the second end identical too
+    np=$1 strategy=$2
+    common=(--set run.steps=12 --set partition.strategy="$strategy")
+    run "$np" "$work/a" "${common[@]}" --set output.checkpoint_interval=12 ||
+      { cat "$work/a.log"; fail "run a failed"; }
+    run "$np" "$work/b" "${common[@]}" --set output.checkpoint_interval=1 \
+      --set output.checkpoint_file=ck_{step}.h5 || { cat "$work/b.log"; fail "run b failed"; }
+    $cmp "$work/a/checkpoint.h5" "$work/b/ck_000012.h5" ||
+      fail "checkpoints at every step changed the run"
+    for s in 5 9; do
+      run "$np" "$work/r$s" "${common[@]}" --set output.checkpoint_interval=12 \
+        --restart "$work/b/ck_00000$s.h5" || { cat "$work/r$s.log"; fail "restart $s failed"; }
+      $cmp "$work/a/checkpoint.h5" "$work/r$s/checkpoint.h5" ||
+        fail "the restart from step $s differs from the run without checkpoints"
+    done
     same_report "$work/a/report.json" "$work/b/report.json"
     ;;
   ranks)

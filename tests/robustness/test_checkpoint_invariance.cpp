@@ -5,6 +5,7 @@
 //   the run that writes checkpoints at several steps  == the run that writes none   (bitwise)
 //   a restart from each of those checkpoints           == the run that writes none   (bitwise)
 //   a restart on other blocks (another strategy)       == to round-off (1e-10 relative)
+//   an in-memory re-balance onto the same blocks      == bitwise
 //   an in-memory re-balance onto other blocks and back  == to round-off
 // The cases: a dense granular gas with random velocities in a box periodic along x and y
 // (DEM only: many crossings and contacts each step), and a small fluidised bed (coupled: the
@@ -178,8 +179,8 @@ void checkInvariance(const char* text, const std::string& strategy, const std::s
     while (!b.finished()) {
       b.step();
       const long long c = crossed(b);
-      const bool due = world.size() > 1 ? c > 0 : (b.steps() == 3 || b.steps() == 4 ||
-                                                  b.steps() == 7);
+      const bool due =
+          world.size() > 1 ? c > 0 : (b.steps() == 3 || b.steps() == 4 || b.steps() == 7);
       if (!due || at.size() == 3 || b.finished()) continue;
       crossings += c;
       at.push_back(b.steps());
@@ -218,6 +219,15 @@ void checkInvariance(const char* text, const std::string& strategy, const std::s
                            paths[0]);
     while (!d.finished()) d.step();
     expectRoundOff(ref, state(d, n), strategy + " -> " + other + " restart");
+  }
+
+  // re-balancing in memory at step 4 onto the same blocks: bitwise
+  {
+    coupling::Simulation e(world, cfg);
+    while (e.steps() < 4) e.step();
+    coupling::Simulation f(cfg, coupling::Simulation::chooseLayouts(world, cfg), e);
+    while (!f.finished()) f.step();
+    expectBitwise(ref, state(f, n), strategy + ": re-balanced in memory onto the same blocks");
   }
 
   // re-balancing in memory at step 4 onto the other strategy's blocks and back at step 7
