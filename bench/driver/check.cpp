@@ -82,12 +82,16 @@ std::string minMax(const std::vector<T>& v) {
 }  // namespace
 
 int checkCase(const CheckOptions& opts) {
+  // The rank count bounds every layout's arithmetic (int block counts, cells / ranks): the same
+  // bound as coloc plan's.
+  const int N = opts.ranks;
+  if (N < 1 || N > (1 << 24))
+    throw ConfigError("--ranks", std::to_string(N) + " is not a rank count coloc lays out (1 .. " +
+                                     std::to_string(1 << 24) + ")");
   const Comm self(MPI_COMM_SELF);
   const Config cfg = Config::load(self, opts.casePath, opts.overrides, coupling::caseSchema());
   const std::vector<std::string> notes = coupling::checkCase(cfg);
   const GlobalGrid g = gridFromConfig(cfg);
-  const int N = opts.ranks;
-  if (N < 1) throw ConfigError("--ranks", "must be at least 1");
   const RunMode mode = runMode(cfg);
   const std::string strategy = cfg.string("partition.strategy");
   std::printf(
@@ -100,14 +104,16 @@ int checkCase(const CheckOptions& opts) {
   // particles a rank), with N ranks on this node.
   std::string how;
   const double limit = coupling::memoryLimitPerRank(cfg, N, &how);
-  const auto est = coupling::estimateMemory(cfg, coupling::largestUniformBlock(cfg, N),
-                                            coupling::sourceParticleCount(cfg) / N);
+  const auto est = coupling::estimateMemory(
+      cfg, coupling::largestUniformBlock(cfg, N),
+      (coupling::sourceParticleCount(cfg) + coupling::inflowParticleCount(cfg)) / N);
   std::printf(
       "coloc check: memory estimate a rank: %s (fluid and pressure solver %s, coupling "
-      "%s, particles %s, base %s)\n",
+      "%s, particles %s, inflow waiting lists %s, base %s)\n",
       coupling::bytesText(est.total()).c_str(), coupling::bytesText(est.fluidBytes).c_str(),
       coupling::bytesText(est.couplingBytes).c_str(),
-      coupling::bytesText(est.particleBytes).c_str(), coupling::bytesText(est.baseBytes).c_str());
+      coupling::bytesText(est.particleBytes).c_str(), coupling::bytesText(est.inflowBytes).c_str(),
+      coupling::bytesText(est.baseBytes).c_str());
   std::printf("coloc check: this machine offers %s a rank (%s, all %d ranks on this node)\n",
               limit > 0 ? coupling::bytesText(limit).c_str() : "?", how.c_str(), N);
   if (limit > 0 && est.total() > limit) {

@@ -24,6 +24,15 @@
 #include "plan.hpp"
 #include "run.hpp"
 
+// hypre (2.26) answers a failed allocation with MPI_Abort(MPI_COMM_WORLD, -1) and no way to
+// intercept it through its API: the driver's own MPI_Abort (the MPI profiling interface; the
+// real one is PMPI_Abort) turns that into a coloc error with a report (run.hpp,
+// libraryAborted). coloc's own aborts (status 2, 3, 4) pass through.
+extern "C" int MPI_Abort(MPI_Comm comm, int errorcode) {
+  if (errorcode == -1) coloc::libraryAborted();
+  return PMPI_Abort(comm, errorcode);
+}
+
 int main(int argc, char** argv) {
   coloc::MpiSession mpi(&argc, &argv);
   const coloc::Comm world = coloc::Comm::world();

@@ -1,6 +1,7 @@
 #include "run.hpp"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -10,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <optional>
@@ -20,6 +22,7 @@
 #include "coloc/core/fault.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/coupling/case_checks.hpp"
+#include "coloc/coupling/checkpoint.hpp"
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
 #include "diagnostics.hpp"
@@ -293,6 +296,61 @@ const char* signalName(int sig) {
   }
 }
 
+/// The start of the message of an allocation failure (report.json: out_of_memory).
+constexpr const char* kOutOfMemory = "out of memory";
+
+bool outOfMemory(const std::string& message) {
+  return message.find(kOutOfMemory) != std::string::npos;
+}
+
+/// What libraryAborted() needs of the run in progress (set by runCase while it runs; the
+/// abort comes from inside a library, with no way back to runCase's frame).
+struct LastWords {
+  const Comm* world = nullptr;
+  std::string casePath, outDir;
+  const Json* config = nullptr;
+};
+LastWords lastWords;
+
+/// The keys whose values differ between two resolved configurations: dotted paths (list entries
+/// by index), each with both values; a list of numbers is one value.
+void diffConfig(const Json& a, const Json& b, const std::string& path,
+                std::vector<std::pair<std::string, std::pair<Json, Json>>>& out) {
+  const auto objectLike = [](const Json& j) {
+    return j.is_object() || (j.is_array() && !j.empty() && j.front().is_object());
+  };
+  if (objectLike(a) && objectLike(b) && a.type() == b.type()) {
+    if (a.is_array() && a.size() != b.size()) {
+      out.push_back({path, {Json(a.size()), Json(b.size())}});
+      return;
+    }
+    if (a.is_array()) {
+      for (std::size_t i = 0; i < a.size(); ++i)
+        diffConfig(a[i], b[i], path + "." + std::to_string(i), out);
+      return;
+    }
+    for (const auto& [k, v] : a.items())
+      diffConfig(v, b.contains(k) ? b[k] : Json(), path.empty() ? k : path + "." + k, out);
+    for (const auto& [k, v] : b.items())
+      if (!a.contains(k)) diffConfig(Json(), v, path.empty() ? k : path + "." + k, out);
+    return;
+  }
+  if (a != b) out.push_back({path, {a, b}});
+}
+
+/// What a restart keeps from its checkpoint although the case gives another value: what is
+/// baked into the state (the particles: their sources, radii and masses, i.e. the materials'
+/// density; the fluid's initial condition). Every other key is taken from the case.
+bool keptFromCheckpoint(const std::string& key) {
+  const auto under = [&](const char* p) {
+    const std::string s(p);
+    return key == s || key.rfind(s + ".", 0) == 0;
+  };
+  if (under("particles.sources") || under("particles.seed") || under("fluid.initial_velocity"))
+    return true;
+  return key.rfind("particles.materials.", 0) == 0 && key.ends_with(".density");
+}
+
 /// Runs `f` on every rank and agrees on the outcome at its end (coloc/core/failure.hpp): the
 /// exit status by the error's type (IoError: kIoErrorStatus, other coloc::Error: `errorCode`,
 /// anything else: kRunFailedStatus), the message of the lowest failing rank, and `where`, a
@@ -310,6 +368,10 @@ FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& 
   } catch (const Error& e) {
     err = e.what();
     code = errorCode;
+  } catch (const std::bad_alloc& e) {
+    err = std::string(kOutOfMemory) + " (" + e.what() +
+          "): an allocation failed; the memory estimate (coloc check) did not foresee it";
+    code = kRunFailedStatus;
   } catch (const std::exception& e) {
     err = std::string("unexpected exception: ") + e.what();
     code = kRunFailedStatus;
@@ -318,6 +380,44 @@ FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& 
 }
 
 }  // namespace
+
+void libraryAborted() {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  std::string msg = std::string(kOutOfMemory) +
+                    "? hypre stopped the job with MPI_Abort(-1), as it does when an allocation "
+                    "fails";
+  rlimit as{};
+  if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
+    msg += " (address-space limit RLIMIT_AS, ulimit -v: " +
+           coupling::bytesText(static_cast<double>(as.rlim_cur)) + ")";
+  msg = "rank " + std::to_string(rank) + ": " + msg;
+  std::fprintf(stderr, "coloc: error: %s; stopping every rank (exit status %d)\n", msg.c_str(),
+               kRunFailedStatus);
+  std::fflush(stderr);
+  // The report from this rank alone (the others cannot be reached in order any more): through a
+  // .tmp of its own and a rename, as every report.
+  if (lastWords.world && lastWords.config && !lastWords.outDir.empty()) {
+    try {
+      Report report(lastWords.casePath, *lastWords.config);
+      report.set("status", "failed");
+      report.set("exit_code", kRunFailedStatus);
+      report.set("error", msg);
+      report.set("out_of_memory", true);
+      const std::filesystem::path dir(lastWords.outDir);
+      const std::string tmp = (dir / ("report.rank" + std::to_string(rank) + ".json.tmp")).string();
+      {
+        std::ofstream out(tmp, std::ios::trunc);
+        out << report.json().dump(2) << "\n";
+      }
+      std::filesystem::rename(tmp, dir / "report.json");
+    } catch (...) {
+      // nothing more can be done here: the message above stands
+    }
+  }
+  PMPI_Abort(MPI_COMM_WORLD, kRunFailedStatus);
+  std::_Exit(kRunFailedStatus);
+}
 
 std::string describeKeys() {
   return "Case-file keys (dotted paths; --set takes the same):\n" +
@@ -351,6 +451,11 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const CheckpointOptions checkpoint = checkpointOptionsFromConfig(cfg, outDir);
   const OutputOptions outputOptions = outputOptionsFromConfig(cfg, outDir);
   const bool root = world.isRoot();
+  // For libraryAborted(), while this run is in progress.
+  lastWords = {&world, opts.casePath, outDir, &cfg.json()};
+  struct ClearLastWords {
+    ~ClearLastWords() { lastWords = {}; }
+  } clearLastWords;
   const auto say = [&](const FailureChannel::Verdict& v, const std::string& before) {
     if (root) std::fprintf(stderr, "coloc: error: %s%s\n", before.c_str(), v.message.c_str());
   };
@@ -373,6 +478,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
   long long rebalances = 0;
   double setupWall = 0, tLoop = 0;
   Json written;                                   // the last report written
+  Json restartReport;                             // a restart: what came from where
+  long long unconvergedWarned = 0;                // pressure solves above tol, warned of
   std::optional<BedDiagnostics> lastDiagnostics;  // of the last series row that had them
   const auto writeReport = [&](const char* status, int code, const std::string& error,
                                const std::string& state, int sig) -> std::string {
@@ -383,6 +490,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
       report.set("status", status);
       report.set("exit_code", code);
       if (!error.empty()) report.set("error", error);
+      if (outOfMemory(error)) report.set("out_of_memory", true);
+      if (!restartReport.is_null()) report.set("restart", restartReport);
       if (!state.empty()) report.set("checkpoint", state);
       if (sig != 0) report.set("signal", signalName(sig));
       report.set("run.setup_s", world.max(setupWall));
@@ -430,6 +539,61 @@ int runCase(const Comm& world, const RunOptions& opts) {
                     simulation->steps(), simulation->time());
       std::fflush(stdout);
     }
+    if (!opts.restart.empty()) {
+      // What the restart keeps from its checkpoint and what it takes from the case, key by key
+      // (docs/robustness.md, "Restarts: what comes from where").
+      const coupling::CheckpointInfo info = coupling::readCheckpointInfo(world, opts.restart);
+      Json stored;
+      try {
+        stored = Json::parse(info.config);
+      } catch (const std::exception&) {
+        stored = Json::object();
+      }
+      std::vector<std::pair<std::string, std::pair<Json, Json>>> diff;
+      diffConfig(stored, cfg.json(), "", diff);
+      Json kept = Json::object(), taken = Json::object();
+      std::string keptText, takenText;
+      for (const auto& [key, values] : diff) {
+        if (key == "description" || key == "name") continue;
+        const bool keep = keptFromCheckpoint(key);
+        (keep ? kept : taken)[key] = {{"checkpoint", values.first}, {"case", values.second}};
+        std::string& text = keep ? keptText : takenText;
+        if (!text.empty()) text += ", ";
+        text += key + " (" + values.first.dump() + " -> " + values.second.dump() + ")";
+      }
+      restartReport = {{"checkpoint", opts.restart},
+                       {"step", info.steps},
+                       {"time", info.time},
+                       {"kept_from_checkpoint", kept},
+                       {"taken_from_case", taken}};
+      if (root && !diff.empty()) {
+        if (!keptText.empty())
+          std::printf(
+              "coloc: note: restart: kept from the checkpoint (in its particles and fields), "
+              "not the case's values: %s\n",
+              keptText.c_str());
+        if (!takenText.empty())
+          std::printf("coloc: note: restart: taken from the case (checkpoint -> case): %s\n",
+                      takenText.c_str());
+        std::fflush(stdout);
+      }
+      // A restart at or past the end runs nothing: refused rather than an empty success.
+      const long long runSteps = cfg.integer("run.steps");
+      const double endTime = cfg.number("run.end_time");
+      if (runSteps > 0 && simulation->steps() >= runSteps)
+        throw ConfigError("run.steps", std::to_string(runSteps) + ": the checkpoint " +
+                                           opts.restart + " is at step " +
+                                           std::to_string(simulation->steps()) +
+                                           " already, nothing to run (run.steps counts from the "
+                                           "initial condition: give more steps)");
+      if (runSteps == 0 && simulation->time() >= endTime * (1.0 - 1e-12)) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%.9g s: the checkpoint is at t = %.9g s", endTime,
+                      simulation->time());
+        throw ConfigError("run.end_time", std::string(buf) + " (" + opts.restart +
+                                              ") already, nothing to run (give a later end)");
+      }
+    }
     progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
     series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
                    cfg);
@@ -454,6 +618,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
       (std::filesystem::path(outDir) / "rebalance.tmp.h5").string();
   const long long runSteps = cfg.integer("run.steps");
   const double runEndTime = cfg.number("run.end_time");
+  const long long pressureMaxIter = cfg.integer("fluid.pressure.max_iter");
+  const double pressureTol = cfg.number("fluid.pressure.tol");
   simulation->beginRun();
   tLoop = MPI_Wtime();
   std::string lastCheckpoint;
@@ -494,6 +660,19 @@ int runCase(const Comm& world, const RunOptions& opts) {
             }
           }
           progress->update(*simulation, runSteps, runEndTime);
+          if (root && simulation->fluid()) {
+            // The same count on every rank (hypre's norms are global); printed once.
+            const fv::FluidCounters c = simulation->fluid()->counters();
+            if (c.unconverged > 0 && unconvergedWarned == 0)
+              std::fprintf(stderr,
+                           "coloc: warning: step %lld: the pressure solve did not converge "
+                           "(residual %.3g of the flux scale after %lld iterations, "
+                           "fluid.pressure.max_iter = %lld, tol = %g); counted in report.json "
+                           "fluid.unconverged_solves (fluid.pressure.on_no_convergence = error "
+                           "stops the run)\n",
+                           simulation->steps(), c.resLast, c.itLast, pressureMaxIter, pressureTol);
+            unconvergedWarned = c.unconverged;
+          }
           // Rank 0's series error, after every collective of the step: agreed cleanly.
           if (root && !series->error().empty()) {
             where = kSeries;
@@ -518,7 +697,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
       // The state at a failure of the physics is kept for inspection (marked failed, not
       // restartable); after an I/O failure nothing more is written but the report.
       std::string saved, saveError;
-      if (checkpoint.onFailure && v.code == kRunFailedStatus) {
+      // (not after an allocation failure: writing the state would allocate more)
+      if (checkpoint.onFailure && v.code == kRunFailedStatus && !outOfMemory(v.message)) {
         const std::string path = failedCheckpointPath(checkpoint.pathAt(simulation->steps() + 1));
         const auto w = phase(channel, kRunFailedStatus, [&] {
           simulation->writeCheckpoint(path, "failed: " + std::string(when) + ": " + v.message);
@@ -588,6 +768,11 @@ int runCase(const Comm& world, const RunOptions& opts) {
     lastCheckpoint = path;
   }
   if (root) series->sync();
+  if (root && unconvergedWarned > 0)
+    std::fprintf(stderr,
+                 "coloc: warning: %lld pressure solve(s) of this run did not converge "
+                 "(report.json fluid.unconverged_solves)\n",
+                 unconvergedWarned);
   const std::string path = writeReport("ok", 0, "", lastCheckpoint, 0);
   if (path.empty()) return kIoErrorStatus;
   if (root) {

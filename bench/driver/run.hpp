@@ -39,6 +39,12 @@ void installStopSignals();
 /// ended. Throws coloc::Error (on every rank) for an input error found before the output folder
 /// is known (the case file or the command line).
 int runCase(const Comm& world, const RunOptions& opts);
+/// A library stopped the job with MPI_Abort(-1) (hypre does when an allocation fails): called by
+/// the driver's MPI_Abort (main.cpp) on the rank that called it. Prints the error, writes
+/// report.json ("failed", out_of_memory) from this rank alone when a run's output folder is known,
+/// and ends every rank with kRunFailedStatus. Does not return.
+[[noreturn]] void libraryAborted();
+
 /// The schema of the whole case file, described for `coloc keys`.
 std::string describeKeys();
 

@@ -1,5 +1,6 @@
 #include "coloc/core/failure.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -90,8 +91,13 @@ Clock::time_point deadlineFromNow(double seconds) {
   MPI_Initialized(&ready);
   if (ready) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (rank > 0) seconds += 1.0;
-  return Clock::now() +
-         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+  // Bounded to what the clock can hold from now (the key's range is far below; a library
+  // caller may pass anything): a deadline past the clock's end would wrap into the past.
+  const Clock::time_point now = Clock::now();
+  const double room = 0.5 * std::chrono::duration<double>(Clock::time_point::max() - now).count();
+  if (!(seconds > 0)) seconds = 0;  // NaN too
+  seconds = std::min({seconds, room, 1e9});
+  return now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 }  // namespace

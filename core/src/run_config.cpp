@@ -33,8 +33,8 @@ void declareRunConfig(Schema& s) {
   s.number("run.failure_wait_s", 10.0,
            "seconds a rank that failed alone waits for the others to learn of it at the next "
            "error check; past it, it prints its message and stops every rank (MPI_Abort), so "
-           "no failure hangs (docs/robustness.md)",
-           Range::positive());
+           "no failure hangs (docs/robustness.md); at most 1e6 s",
+           Range::openClosed(0.0, 1e6));
 }
 
 RunMode runMode(const Config& cfg) {

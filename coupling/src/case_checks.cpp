@@ -1,6 +1,8 @@
 // Whole-case checks and the memory estimate: coupling/include/coloc/coupling/case_checks.hpp.
 #include "coloc/coupling/case_checks.hpp"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +19,7 @@ namespace coloc::coupling {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
 const char* const kFaces[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
 
 std::string num(double v) {
@@ -68,6 +71,9 @@ void checkTimeSteps(const Config& cfg, std::vector<std::string>& notes) {
     return;
   }
   const double ratio = dtf / dtp;
+  if (!(ratio <= 1e6))  // a sub-step count is an integer of the time loop
+    throw ConfigError("fluid.dt", num(dtf) + " s is " + num(ratio) + " particles.dt = " + num(dtp) +
+                                      " s: more than 1e6 DEM steps a CFD step");
   const double n = std::round(ratio);
   if (n >= 1 && std::fabs(ratio - n) <= 1e-9 * ratio) return;
   const double lo = std::max(1.0, std::floor(ratio));
@@ -112,13 +118,148 @@ void checkBoundaries(const Config& cfg, std::vector<std::string>& notes) {
     notes.push_back("run.mode = fluid: particles.sources are not used");
 }
 
+/// The simulated time the run covers from the initial condition (s): run.steps times the
+/// largest step (a coupled step: dem_substeps DEM steps, else fluid.dt, which is also the largest
+/// adaptive step), or run.end_time.
+double runDuration(const Config& cfg) {
+  const long long steps = cfg.integer("run.steps");
+  if (steps <= 0) return cfg.number("run.end_time");
+  const double dtp = cfg.number("particles.dt");
+  const auto sub = static_cast<double>(cfg.integer("coupling.dem_substeps"));
+  const double step = runMode(cfg) == RunMode::ParticlesOnly
+                          ? std::max(1.0, sub) * dtp
+                          : (sub > 0 ? sub * dtp : std::max(cfg.number("fluid.dt"), dtp));
+  return static_cast<double>(steps) * step;
+}
+
+/// One particles.inflow entry as far as counts go, from the case file alone (the DEM parses and
+/// checks the same keys again, with the box, when it is built).
+struct InflowCount {
+  std::string key;      // particles.inflow[n]
+  std::string rateKey;  // its .rate or .mass_rate
+  double count = 0;     // particles due over the run (an upper bound for mass_rate)
+  double perStep = 0;   // particles due a DEM step (a lower bound for mass_rate)
+  double sites = 0;     // insertion sites of the patch
+  double rmin = 0;
+};
+
+std::vector<InflowCount> inflowCounts(const Config& cfg) {
+  std::vector<InflowCount> out;
+  if (runMode(cfg) == RunMode::FluidOnly || !cfg.has("particles.inflow")) return out;
+  const GlobalGrid g = gridFromConfig(cfg);
+  const Json& mats = cfg.at("particles.materials");
+  const double T = runDuration(cfg), dtp = cfg.number("particles.dt");
+  const Json& list = cfg.at("particles.inflow");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Json& src = list[i];
+    InflowCount c;
+    c.key = "particles.inflow[" + std::to_string(i) + "]";
+    // radii: fixed (radius), discrete (diameters), uniform and lognormal (min, max)
+    const Json& sz = src.at("size");
+    const std::string type = sz.at("type").get<std::string>();
+    double rmin = 0, rmax = 0;
+    if (type == "fixed") {
+      rmin = rmax = src.at("radius").get<double>();
+    } else if (type == "discrete") {
+      for (const auto& d : sz.at("diameters")) {
+        rmin = rmin > 0 ? std::min(rmin, 0.5 * d.get<double>()) : 0.5 * d.get<double>();
+        rmax = std::max(rmax, 0.5 * d.get<double>());
+      }
+    } else {
+      rmin = 0.5 * sz.at("min").get<double>();
+      rmax = 0.5 * sz.at("max").get<double>();
+    }
+    if (!(rmin > 0) || !(rmax >= rmin)) continue;  // refused with its key by the DEM's checks
+    c.rmin = rmin;
+    const auto mat = static_cast<std::size_t>(src.at("material").get<long long>());
+    const double rho = mat < mats.size() ? mats[mat].at("density").get<double>() : 0.0;
+    const double rate = src.at("rate").get<double>(), massRate = src.at("mass_rate").get<double>();
+    const double start = src.at("start").get<double>(), end = src.at("end").get<double>();
+    const double stop = end > 0 ? std::min(end, T) : T;
+    const double span = std::max(0.0, stop - start);
+    const double mMin = rho * 4.0 / 3.0 * kPi * rmin * rmin * rmin;
+    const double mMax = rho * 4.0 / 3.0 * kPi * rmax * rmax * rmax;
+    if (rate > 0) {
+      c.rateKey = c.key + ".rate";
+      c.count = rate * span;
+      c.perStep = rate * dtp;
+    } else if (massRate > 0 && mMin > 0) {
+      c.rateKey = c.key + ".mass_rate";
+      c.count = massRate * span / mMin;
+      c.perStep = massRate * dtp / mMax;
+    } else {
+      continue;
+    }
+    // the sites of the patch (the whole face by default), as the DEM lays them
+    const std::string face = src.at("face").get<std::string>();
+    const int axis = face[0] - 'x';
+    const int ab[2] = {axis == 0 ? 1 : 0, axis == 2 ? 1 : 2};
+    const double s = 2 * rmax * (1 + src.at("gap").get<double>());
+    const Json& pmin = src.at("patch").at("min");
+    const Json& pmax = src.at("patch").at("max");
+    c.sites = 1;
+    for (int k = 0; k < 2; ++k) {
+      const int d = ab[k];
+      const bool whole = pmin.size() != 2 || pmax.size() != 2;
+      const double w = whole ? g.length[d] : pmax[k].get<double>() - pmin[k].get<double>();
+      c.sites *= std::max(0.0, std::floor(w / s * (1 + 1e-12)));
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+/// At most this many particles enter through all the inflows of one run (counts, ids and the
+/// waiting lists stay far inside 64-bit integers and doubles).
+constexpr double kMaxInflowParticles = 1e9;
+
+void checkInflow(const Config& cfg) {
+  double total = 0;
+  for (const InflowCount& c : inflowCounts(cfg)) {
+    total += c.count;
+    if (!(c.count <= kMaxInflowParticles) || !(total <= kMaxInflowParticles))
+      throw ConfigError(c.rateKey, "over the " + num(runDuration(cfg)) +
+                                       " s the run covers, the inflows would insert about " +
+                                       num(total) +
+                                       " particles, more than coloc inserts in one run (" +
+                                       num(kMaxInflowParticles) +
+                                       "): lower the rate, or set its end or a shorter run");
+    if (c.sites >= 1 && c.perStep > c.sites)
+      throw ConfigError(c.rateKey, num(c.perStep) + " particles are due every DEM step (" +
+                                       (c.rateKey.ends_with(".rate")
+                                            ? std::string("rate x particles.dt")
+                                            : std::string("mass_rate x particles.dt / the "
+                                                          "largest particle's mass")) +
+                                       "), but the patch has " + num(c.sites) +
+                                       " insertion sites: the waiting list could never be "
+                                       "drained; lower the rate or widen the patch");
+  }
+}
+
 }  // namespace
+
+double inflowParticleCount(const Config& cfg) {
+  // Bounded by what the box holds (a random close packing of the smallest spheres).
+  const GlobalGrid g = gridFromConfig(cfg);
+  const double box = g.length[0] * g.length[1] * g.length[2];
+  double n = 0;
+  for (const InflowCount& c : inflowCounts(cfg))
+    n += std::min(c.count, 0.64 * box / (4.0 / 3.0 * kPi * c.rmin * c.rmin * c.rmin));
+  return n;
+}
+
+double inflowWaitingCount(const Config& cfg) {
+  double n = 0;
+  for (const InflowCount& c : inflowCounts(cfg)) n += c.count;
+  return n;
+}
 
 std::vector<std::string> checkCase(const Config& cfg) {
   std::vector<std::string> notes;
   checkName(cfg);
   checkTimeSteps(cfg, notes);
   checkBoundaries(cfg, notes);
+  checkInflow(cfg);
   const std::string mode = cfg.string("run.mode");
   if (mode == "coupled" || mode == "dummy_dem") selfVelocityFromConfig(cfg);
   if (cfg.integer("run.steps") > 0 && cfg.number("run.end_time") > 0)
@@ -153,6 +294,7 @@ constexpr double kParticleBytes = 400;         // per particle
 // (weighted) Jacobi smoother on Galerkin levels +118..123, PFMG without PCG +96..104.
 constexpr double kJacobiBytesPerCell = 125;    // per ghosted cell
 constexpr double kNoKrylovBytesPerCell = 105;  // per ghosted cell
+constexpr double kWaitingBytes = 16;           // per particle due from an inflow
 
 MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particles) {
   MemoryEstimate m;
@@ -176,6 +318,8 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
   if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
     m.couplingBytes = kCouplingBytesPerCell * g;
   m.particleBytes = kParticleBytes * m.particles;
+  // A waiting entry is a 64-bit id in a vector that may have doubled: 16 bytes at most.
+  if (mode != RunMode::FluidOnly) m.inflowBytes = kWaitingBytes * inflowWaitingCount(cfg);
   return m;
 }
 
@@ -218,7 +362,28 @@ double memoryLimitPerRank(const Config& cfg, int ranksOnNode, std::string* how) 
   if (how)
     *how = "MemAvailable " + bytesText(avail) + " / " + std::to_string(ranksOnNode) +
            " rank(s) on this node";
-  return avail / std::max(ranksOnNode, 1);
+  double limit = avail / std::max(ranksOnNode, 1);
+  // An address-space limit (ulimit -v) binds first when it leaves less than that: what it still
+  // lets this process map, plus the base the estimate counts (already mapped now).
+  rlimit as{};
+  if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    std::ifstream st("/proc/self/status");
+    double vmKb = 0;
+    while (std::getline(st, line))
+      if (line.rfind("VmSize:", 0) == 0) {
+        std::istringstream(line.substr(7)) >> vmKb;
+        break;
+      }
+    const double room =
+        std::max(0.0, static_cast<double>(as.rlim_cur) - vmKb * 1024.0) + kBaseBytes;
+    if (room < limit) {
+      limit = room;
+      if (how)
+        *how = "RLIMIT_AS (ulimit -v) " + bytesText(static_cast<double>(as.rlim_cur)) +
+               ", of which " + bytesText(vmKb * 1024.0) + " is mapped already";
+    }
+  }
+  return limit;
 }
 
 std::string bytesText(double b) {
@@ -236,8 +401,9 @@ void checkMemory(const Comm& world, const Config& cfg) {
   // Same inputs on every rank except the node's memory: the verdict is made collective below.
   std::string err;
   try {
-    const MemoryEstimate m = estimateMemory(cfg, largestUniformBlock(cfg, world.size()),
-                                            sourceParticleCount(cfg) / world.size());
+    const MemoryEstimate m =
+        estimateMemory(cfg, largestUniformBlock(cfg, world.size()),
+                       (sourceParticleCount(cfg) + inflowParticleCount(cfg)) / world.size());
     MPI_Comm node;
     MPI_Comm_split_type(world.raw(), MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
     int onNode = 1;
@@ -248,11 +414,14 @@ void checkMemory(const Comm& world, const Config& cfg) {
     if (limit > 0 && m.total() > limit) {
       char cells[96];
       std::snprintf(cells, sizeof cells, "%lld cells", m.cells);
-      err = "domain.cells, particles.sources: the case needs about " + bytesText(m.total()) +
-            " a rank (" + cells + " in the largest block: fluid " + bytesText(m.fluidBytes) +
-            ", coupling " + bytesText(m.couplingBytes) + "; " + num(m.particles) +
-            " particles: " + bytesText(m.particleBytes) + "; base " + bytesText(m.baseBytes) +
-            "), the machine offers " + bytesText(limit) + " (" + how +
+      err = std::string("domain.cells, particles.sources") +
+            (m.inflowBytes > 0 ? ", particles.inflow" : "") + ": the case needs about " +
+            bytesText(m.total()) + " a rank (" + cells + " in the largest block: fluid " +
+            bytesText(m.fluidBytes) + ", coupling " + bytesText(m.couplingBytes) + "; " +
+            num(m.particles) + " particles: " + bytesText(m.particleBytes) +
+            (m.inflowBytes > 0 ? "; inflow waiting lists " + bytesText(m.inflowBytes) : "") +
+            "; base " + bytesText(m.baseBytes) + "), the machine offers " + bytesText(limit) +
+            " (" + how +
             "): use fewer cells or particles, more ranks or nodes, or set run.memory_limit (GiB) "
             "if the estimate is wrong";
     }

@@ -15,7 +15,7 @@ void declareConfig(Schema& s) {
   s.integer("coupling.smoothing_passes", 0,
             "passes of a conservative diffusion filter (alpha 1/8) on the deposited fields and, "
             "adjointly, on the fields sampled at the particles (0: off)",
-            Range::nonNegative());
+            Range::between(0, 1000));
   s.string("coupling.self_velocity", "none",
            "correction of the self-induced velocity (the particle's own drag reaction in the fluid "
            "it samples): none, or stokeslet (the undisturbed flow of Balachandar, Liu & Lakhote "
@@ -30,7 +30,7 @@ void declareConfig(Schema& s) {
             "particles.dt in the fluid's step (fluid.dt, or the adaptive step), at least 1. "
             "particles mode: each step is max(1, dem_substeps) DEM steps (0 means one) and "
             "fluid.dt is ignored",
-            Range::nonNegative());
+            Range::between(0, 1e6));
 }
 
 Schema caseSchema() {

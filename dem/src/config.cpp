@@ -56,8 +56,8 @@ void declareConfig(Schema& s) {
            Range::openClosed(0, 1));
   s.number("particles.skin", 0.2,
            "Verlet skin as a fraction of the largest particle diameter; lists are rebuilt when a "
-           "particle moved more than skin/2",
-           Range::positive());
+           "particle moved more than skin/2; at most 10",
+           Range::openClosed(0.0, 10.0));
   s.string("particles.contact_model", "hertz_mindlin",
            "hertz_mindlin: Hertz normal + Mindlin no-slip tangential with history (LIGGGHTS "
            "formulas); linear: spring-dashpot with history",
@@ -95,10 +95,10 @@ void declareConfig(Schema& s) {
   s.integer("particles.bin_cells", 0,
             "bin edge = this many CFD cells (0: automatic, the smallest bin that coincides with "
             "the cells and holds the interaction range)",
-            Range::nonNegative());
+            Range::between(0, 1e6));
   s.integer("particles.bin_split", 0,
             "bin edge = CFD cell / this number (0: automatic); exclusive with bin_cells",
-            Range::nonNegative());
+            Range::between(0, 1024));
   s.number("particles.overlap_limit", 0.2,
            "largest overlap allowed, as a fraction of the smaller radius; beyond it the run stops",
            Range::positive());

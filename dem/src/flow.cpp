@@ -81,8 +81,9 @@ void DemSolver::Impl::insertInflow() {
     const long long before = flow.due[n];
     if (te > f.start) {
       if (f.rate > 0) {
-        flow.due[n] =
-            std::max(flow.due[n], static_cast<long long>(std::floor(f.rate * (te - f.start))));
+        // Bounded before the cast (the case checks bound the run's total far below this).
+        const double due = std::min(std::floor(f.rate * (te - f.start)), 0x1p53);
+        flow.due[n] = std::max(flow.due[n], static_cast<long long>(due));
       } else {
         while (flow.dueMass[n] < f.massRate * (te - f.start)) {
           const auto id = static_cast<std::uint64_t>(

@@ -161,10 +161,18 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
     } else {
       key = "particles.bin_cells";
       if (h >= rc) {
-        split = rc > 0 ? std::clamp(static_cast<long long>(std::floor(h / rc)), 1LL,
-                                    std::min(64LL, splitCap))
-                       : 1;
+        // clamped as a double: h / rc may be beyond any integer
+        split = rc > 0
+                    ? static_cast<long long>(std::clamp(
+                          std::floor(h / rc), 1.0, static_cast<double>(std::min(64LL, splitCap))))
+                    : 1;
       } else {
+        // A range wider than the box is refused before it becomes a bin count (a skin of 1e20
+        // would overflow the cast and loop through every integer).
+        if (!(rc / h <= static_cast<double>(grid.cells[d])))
+          throw ConfigError("particles.skin", range() + " is wider than the box along " + kAxis[d] +
+                                                  " (" + fmt(h * grid.cells[d]) +
+                                                  " m): lower particles.skin or the particle size");
         multiple = static_cast<long long>(std::ceil(rc / h));
         while (multiple <= grid.cells[d] && (!divides(multiple) || multiple * h < rc)) ++multiple;
         if (multiple > grid.cells[d])

@@ -94,7 +94,12 @@ void declareConfig(Schema& s) {
            Range::openClosed(0.0, 1.0));
   s.integer("fluid.pressure.max_iter", 200,
             "iteration cap: PCG iterations, or multigrid cycles with fluid.pressure.krylov = none",
-            Range::atLeast(1));
+            Range::between(1, 1e6));
+  s.string("fluid.pressure.on_no_convergence", "warn",
+           "a pressure solve that stops at max_iter above its tolerance: warn (a warning on the "
+           "first, counted in report.json fluid.unconverged_solves) or error (the run stops, "
+           "status 3)",
+           {"warn", "error"});
   s.string("fluid.pressure.krylov", "pcg",
            "pcg: PCG preconditioned by one multigrid cycle; none: the multigrid cycle alone, "
            "repeated until the same stopping test (docs/fv.md, pressure solver options)",
@@ -152,6 +157,7 @@ FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid) {
   o.tol = cfg.number("fluid.pressure.tol");
   o.maxIter = static_cast<int>(cfg.integer("fluid.pressure.max_iter"));
   o.pcg = cfg.string("fluid.pressure.krylov") == "pcg";
+  o.errorOnNoConvergence = cfg.string("fluid.pressure.on_no_convergence") == "error";
   o.preSweeps = static_cast<int>(cfg.integer("fluid.pressure.pre_sweeps"));
   o.postSweeps = static_cast<int>(cfg.integer("fluid.pressure.post_sweeps"));
   if (o.preSweeps + o.postSweeps == 0)

@@ -168,6 +168,7 @@ FluidCounters FluidSolver::counters() const {
   c.setups = m.ps->setups() + m.setupsOffset;
   c.itMax = m.itMax;
   c.itLast = m.itLast;
+  c.unconverged = m.unconverged;
   c.haveOld = m.haveOld;
   c.ratesStale = m.ratesStale;
   return c;
@@ -211,6 +212,7 @@ void FluidSolver::restoreState(const FluidCounters& c) {
   m.setupsOffset = c.setups - m.ps->setups();
   m.itMax = static_cast<int>(c.itMax);
   m.itLast = static_cast<int>(c.itLast);
+  m.unconverged = c.unconverged;  // a re-balance keeps it; a checkpoint does not store it
   m.haveOld = c.haveOld;
   m.ratesStale = c.ratesStale;
   m.inLocal = m.outLocal = m.dVolLocal = m.dVolGrossLocal = 0;
@@ -306,6 +308,7 @@ Json FluidSolver::diagnostics() const {
                    {"setups", m.ps->setups() + m.setupsOffset}};
   j["checks"] = {{"mass_balance", balance}};
   j["fluid"] = {{"steps", m.steps},
+                {"unconverged_solves", m.unconverged},
                 {"time", m.time},
                 {"dt_last", m.dtLast},
                 {"cfl_last", m.cflLast},

@@ -63,6 +63,7 @@ struct FluidSolver::Impl {
   bool anyK = false;
   long long steps = 0;
   long long itSum = 0, solves = 0;
+  long long unconverged = 0;  // pressure solves above the tolerance (this run)
   int itMax = 0, itLast = 0;
   double resLast = 0;
   double maxRate = 0;  // max over cells of sum_d |u_d|/h_d (1/s), after the last step

@@ -184,6 +184,10 @@ int PressureSolver::solve(std::span<double> b, std::span<double> x, double scale
   check(HYPRE_StructVectorGetBoxValues(x_, ilower_, iupper_, x.data()), "solution values");
   lastResidual_ = res;
   lastResidualNorm_ = res * bnorm;
+  // The stopping test of both paths: ||r|| <= tol max(||b||, scale) (a little slack for the
+  // solvers' own round-off in forming the norm).
+  lastTarget_ = opt_.tol * std::max(bnorm, scale);
+  lastConverged_ = !(lastResidualNorm_ > lastTarget_ * (1 + 1e-6));
   return static_cast<int>(it);
 }
 

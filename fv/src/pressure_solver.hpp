@@ -37,6 +37,7 @@ class PressureSolver {
     Rap rap = Rap::Galerkin;
     bool skipRelax = true;
     int preSweeps = 1, postSweeps = 1;  // per level and cycle (SMG too)
+    bool errorOnNoConvergence = false;  // fluid.pressure.on_no_convergence = error
   };
   PressureSolver(const Decomposition& dec, const Options& options);
   PressureSolver(const Decomposition& dec, Kind kind, double tol, int maxIter)
@@ -54,6 +55,11 @@ class PressureSolver {
   int solve(std::span<double> b, std::span<double> x, double scale);
   double lastResidualNorm() const { return lastResidualNorm_; }
   double lastRelativeResidual() const { return lastResidual_; }
+  /// Whether the last solve met its stopping test (not stopped by max_iter above it).
+  bool lastConverged() const { return lastConverged_; }
+  /// The tolerance of the last solve's stopping test (the norm ||r||_2 had to reach).
+  double lastTarget() const { return lastTarget_; }
+  const Options& options() const { return opt_; }
   int setups() const { return setups_; }
 
  private:
@@ -68,7 +74,8 @@ class PressureSolver {
   HYPRE_StructVector b_ = nullptr, x_ = nullptr;
   HYPRE_StructSolver pcg_ = nullptr, mg_ = nullptr;
   bool ready_ = false;
-  double lastResidual_ = 0, lastResidualNorm_ = 0;
+  double lastResidual_ = 0, lastResidualNorm_ = 0, lastTarget_ = 0;
+  bool lastConverged_ = true;
   int setups_ = 0;
 };
 

@@ -323,6 +323,20 @@ void FluidSolver::Impl::solvePressure() {
   itSum += itLast;
   ++solves;
   itMax = std::max(itMax, itLast);
+  if (!ps->lastConverged()) {
+    // The same verdict on every rank (hypre's norms are global).
+    ++unconverged;
+    if (ps->options().errorOnNoConvergence) {
+      char buf[320];
+      std::snprintf(buf, sizeof buf,
+                    "fluid.pressure.on_no_convergence = error: the pressure solve of fluid step "
+                    "%lld did not converge: ||r|| = %.3g above the target %.3g after %d "
+                    "iterations (fluid.pressure.max_iter = %d, fluid.pressure.tol = %g)",
+                    steps + 1, ps->lastResidualNorm(), ps->lastTarget(), itLast,
+                    ps->options().maxIter, ps->options().tol);
+      throw Error(buf);
+    }
+  }
 }
 
 void FluidSolver::Impl::project(double dt) {

@@ -24,6 +24,10 @@ std::vector<std::string> checkCase(const Config& cfg);
 
 /// The number of particles the case's sources create.
 double sourceParticleCount(const Config& cfg);
+/// The particles the inflows insert over the run, at most what the box holds (densely packed).
+double inflowParticleCount(const Config& cfg);
+/// The particles the inflows make due over the run: the longest their waiting lists can grow.
+double inflowWaitingCount(const Config& cfg);
 
 /// Estimated resident memory of one rank, from its block and its particles. Coefficients
 /// measured with peak RSS on this project's runs (docs/case-files.md, "Memory estimate").
@@ -35,7 +39,10 @@ struct MemoryEstimate {
   double fluidBytes = 0;     // fluid fields and the pressure solver's (hypre) matrix and vectors
   double couplingBytes = 0;  // deposited fields, fluid fraction, drag coefficients
   double particleBytes = 0;  // particle arrays, neighbour lists, bins, contact histories
-  double total() const { return baseBytes + fluidBytes + couplingBytes + particleBytes; }
+  double inflowBytes = 0;    // the inflows' waiting lists (every rank holds them whole)
+  double total() const {
+    return baseBytes + fluidBytes + couplingBytes + particleBytes + inflowBytes;
+  }
 };
 MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particles);
 
@@ -43,7 +50,8 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
 Int3 largestUniformBlock(const Config& cfg, int ranks);
 
 /// What the machine offers one rank: run.memory_limit (GiB) when set, else /proc/meminfo's
-/// MemAvailable divided by `ranksOnNode`. `how` says which. 0 when unknown.
+/// MemAvailable divided by `ranksOnNode`, and at most the address space this process may still
+/// map (RLIMIT_AS, `ulimit -v`, less what is mapped now). `how` says which. 0 when unknown.
 double memoryLimitPerRank(const Config& cfg, int ranksOnNode, std::string* how);
 
 /// "1.23 GiB"

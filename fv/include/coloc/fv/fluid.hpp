@@ -45,8 +45,9 @@ struct FluidCounters {
   double resLast = 0, rhsScaleLast = 0;
   long long steps = 0, itSum = 0, solves = 0, setups = 0;
   long long itMax = 0, itLast = 0;
-  bool haveOld = false;     // an AB2 history exists (the next step uses AB2)
-  bool ratesStale = false;  // nextDt() recomputes the velocity rate first
+  long long unconverged = 0;  // pressure solves of this run that ended above the tolerance
+  bool haveOld = false;       // an AB2 history exists (the next step uses AB2)
+  bool ratesStale = false;    // nextDt() recomputes the velocity rate first
 };
 
 /// The fluid's inputs from the coupling, for writing their owned cells (the fluid's own arrays:

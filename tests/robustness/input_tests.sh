@@ -1,0 +1,160 @@
+#!/usr/bin/env bash
+# input_tests.sh TEST COLOC MPIEXEC PYTHON BED INFLOW WORKDIR — numbers that do not fit, memory the
+# estimate must see, and what a run says of itself (issue 27: docs/robustness.md,
+# docs/case-files.md). BED is cases/bed.json, INFLOW cases/inflow.json. Each run is bounded by
+# `timeout`: a hang fails the test instead of stalling it.
+#
+#   inflow_rate       rate 1e300: refused naming particles.inflow[0].rate (check and run)
+#   inflow_mass_rate  mass_rate 1e12: refused naming .mass_rate, no hang in the insertion loop
+#   inflow_waiting    more due a DEM step than the patch has sites: refused (waiting list); a
+#                     waiting list larger than run.memory_limit: refused by the memory estimate
+#   skin              particles.skin = 1e20: refused naming the key (check and run), no hang
+#   failure_wait      run.failure_wait_s = 1e10: refused; 1e6 with a failure: clean exit 3
+#   ranks             coloc check --ranks 2147483647: exit 2 naming --ranks, no SIGFPE
+#   rlimit_as         an address-space limit (ulimit -v): refused by the estimate (RLIMIT_AS), or,
+#                     with run.memory_limit forcing the run, "out of memory" with a report
+#   restart_changes   a restart with another density and source count: the notes and
+#                     report.json restart.{kept_from_checkpoint,taken_from_case}
+#   restart_nothing   a restart whose run.steps is at the checkpoint's step: exit 2, report failed
+#   pressure_max_iter fluid.pressure.max_iter = 1: a warning and fluid.unconverged_solves; with
+#                     fluid.pressure.on_no_convergence = error: exit 3 naming the key
+set -u
+test=$1 coloc=$2 mpiexec=$3 py=$4 bed=$5 inflow=$6 work=$7
+rm -rf "$work" && mkdir -p "$work" || exit 1
+fail() { echo "FAIL: $*"; exit 1; }
+# run NAME CMD...: time-limited; output in $log, status in $rc
+run() {
+  local name=$1
+  shift
+  log="$work/$name.log"
+  timeout 60 "$@" > "$log" 2>&1
+  rc=$?
+  echo "== $name: exit $rc: $*"
+  cat "$log"
+  [[ $rc -eq 124 ]] && fail "timed out (hang): $*"
+  return 0
+}
+expect() {  # expect CODE TEXT: the last run's status and a line of its output
+  [[ $rc -eq $1 ]] || fail "exit status $rc, expected $1"
+  grep -qF -- "$2" "$log" || fail "the output does not contain: $2"
+}
+json() {  # json FILE EXPR: a Python expression over d (the parsed file) must hold
+  "$py" -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if ($2) else 1)" "$1" ||
+    fail "$1: not ($2)"
+}
+one=("$mpiexec" -n 1 --bind-to none)
+two=("$mpiexec" -n 2 --bind-to none)
+
+case $test in
+  inflow_rate)
+    run check "$coloc" check "$inflow" --set particles.inflow.0.rate=1e300
+    expect 2 "coloc: error: particles.inflow[0].rate:"
+    run run "${two[@]}" "$coloc" run "$inflow" --out "$work/a" --quiet \
+      --set particles.inflow.0.rate=1e300
+    expect 2 "coloc: error: particles.inflow[0].rate:"
+    # an ordinary rate still runs
+    run ok "${two[@]}" "$coloc" run "$inflow" --out "$work/b" --quiet
+    expect 0 "report written"
+    ;;
+  inflow_mass_rate)
+    run check "$coloc" check "$inflow" --set particles.inflow.0.rate=0 \
+      --set particles.inflow.0.mass_rate=1e12
+    expect 2 "coloc: error: particles.inflow[0].mass_rate:"
+    run run "${two[@]}" "$coloc" run "$inflow" --out "$work/a" --quiet \
+      --set particles.inflow.0.rate=0 --set particles.inflow.0.mass_rate=1e12
+    expect 2 "coloc: error: particles.inflow[0].mass_rate:"
+    ;;
+  inflow_waiting)
+    # 1e8/s x 5e-5 s = 5000 particles a DEM step onto 81 sites
+    run check "$coloc" check "$inflow" --set particles.inflow.0.rate=1e8
+    expect 2 "insertion sites: the waiting list could never be drained"
+    run run "${two[@]}" "$coloc" run "$inflow" --out "$work/a" --quiet \
+      --set particles.inflow.0.rate=1e8
+    expect 2 "coloc: error: particles.inflow[0].rate:"
+    # 1e6/s (50 a step) over 100 s: 1e8 due, 1.6 GB of waiting list on every rank
+    run mem "${two[@]}" "$coloc" run "$inflow" --out "$work/b" --quiet \
+      --set particles.inflow.0.rate=1e6 --set run.steps=0 --set run.end_time=100 \
+      --set run.memory_limit=0.5
+    expect 2 "particles.inflow: the case needs about"
+    grep -qF "inflow waiting lists" "$log" || fail "the estimate does not name the waiting lists"
+    ;;
+  skin)
+    run check "$coloc" check "$bed" --set particles.skin=1e20
+    expect 2 "coloc: error: particles.skin:"
+    run run "${two[@]}" "$coloc" run "$bed" --out "$work/a" --quiet --set particles.skin=1e20
+    expect 2 "coloc: error: particles.skin:"
+    ;;
+  failure_wait)
+    run check "$coloc" check "$bed" --set run.failure_wait_s=1e10
+    expect 2 "coloc: error: run.failure_wait_s:"
+    run run "${two[@]}" "$coloc" run "$bed" --out "$work/a" --quiet --set run.failure_wait_s=1e10
+    expect 2 "coloc: error: run.failure_wait_s:"
+    # the largest allowed wait runs normally (its deadline is never armed)
+    run ok "${two[@]}" "$coloc" run "$bed" --out "$work/b" --quiet --set run.failure_wait_s=1e6 \
+      --set run.steps=2
+    expect 0 "report written"
+    ;;
+  ranks)
+    run big "$coloc" check "$bed" --ranks 2147483647
+    expect 2 "coloc: error: --ranks:"
+    run max "$coloc" check "$bed" --ranks 16777216
+    [[ $rc -eq 0 || $rc -eq 2 ]] || fail "exit status $rc at --ranks 16777216"
+    run neg "$coloc" check "$bed" --ranks 0
+    expect 2 "coloc: error: --ranks:"
+    ;;
+  rlimit_as)
+    # the rank alone under the limit (mpirun itself is not limited)
+    big=(--set 'domain.cells=[160,160,160]' --set run.mode=fluid --set run.steps=2)
+    run est "$mpiexec" -n 1 --bind-to none bash -c \
+      "ulimit -v $((1500 * 1024)) && exec '$coloc' run '$bed' --out '$work/a' --quiet ${big[*]}"
+    expect 2 "RLIMIT_AS"
+    run oom "$mpiexec" -n 1 --bind-to none bash -c \
+      "ulimit -v $((1500 * 1024)) && exec '$coloc' run '$bed' --out '$work/b' --quiet ${big[*]} \
+       --set run.memory_limit=100"
+    [[ $rc -eq 3 ]] || fail "exit status $rc, expected 3"
+    grep -qF "out of memory" "$log" || fail "no out-of-memory message"
+    json "$work/b/report.json" "d['status'] == 'failed' and d['out_of_memory'] and d['exit_code'] == 3"
+    ;;
+  restart_changes)
+    run base "${two[@]}" "$coloc" run "$bed" --out "$work/a" --quiet --set run.steps=2 \
+      --set output.checkpoint_interval=2
+    expect 0 "report written"
+    run restart "${two[@]}" "$coloc" run "$bed" --out "$work/b" --restart "$work/a/checkpoint.h5" \
+      --set run.steps=3 --set particles.materials.0.density=3000 \
+      --set particles.sources.0.count=300 --set fluid.nu=2e-6
+    expect 0 "kept from the checkpoint"
+    grep -qF "particles.materials.0.density (2500.0 -> 3000.0)" "$log" || fail "density not noted"
+    grep -qF "particles.sources.0.count (400 -> 300)" "$log" || fail "source count not noted"
+    grep -qF "fluid.nu (1e-06 -> 2e-06)" "$log" || fail "nu not noted"
+    json "$work/b/report.json" "'particles.materials.0.density' in d['restart']['kept_from_checkpoint'] and 'particles.sources.0.count' in d['restart']['kept_from_checkpoint'] and 'fluid.nu' in d['restart']['taken_from_case'] and d['restart']['step'] == 2"
+    ;;
+  restart_nothing)
+    run base "${two[@]}" "$coloc" run "$bed" --out "$work/a" --quiet --set run.steps=2 \
+      --set output.checkpoint_interval=2
+    expect 0 "report written"
+    run same "${two[@]}" "$coloc" run "$bed" --out "$work/b" --quiet \
+      --restart "$work/a/checkpoint.h5" --set run.steps=2
+    expect 2 "coloc: error: run.steps: 2: the checkpoint"
+    json "$work/b/report.json" "d['status'] == 'failed' and d['exit_code'] == 2"
+    run end "${two[@]}" "$coloc" run "$bed" --out "$work/c" --quiet \
+      --restart "$work/a/checkpoint.h5" --set run.steps=0 --set run.end_time=0.001
+    expect 2 "coloc: error: run.end_time:"
+    ;;
+  pressure_max_iter)
+    run warn "${two[@]}" "$coloc" run "$bed" --out "$work/a" --quiet --set run.steps=3 \
+      --set fluid.pressure.max_iter=1
+    expect 0 "coloc: warning: step 1: the pressure solve did not converge"
+    json "$work/a/report.json" "d['status'] == 'ok' and d['fluid']['unconverged_solves'] == 3"
+    run error "${two[@]}" "$coloc" run "$bed" --out "$work/b" --quiet --set run.steps=3 \
+      --set fluid.pressure.max_iter=1 --set fluid.pressure.on_no_convergence=error
+    expect 3 "fluid.pressure.on_no_convergence = error: the pressure solve of fluid step 1"
+    json "$work/b/report.json" "d['status'] == 'failed'"
+    # the default case converges: no warning, a zero count
+    run ok "${two[@]}" "$coloc" run "$bed" --out "$work/c" --quiet --set run.steps=2
+    expect 0 "report written"
+    grep -q "warning" "$log" && fail "a warning where every solve converged"
+    json "$work/c/report.json" "d['fluid']['unconverged_solves'] == 0"
+    ;;
+  *) fail "unknown test $test" ;;
+esac
+echo "PASS: $test"
