@@ -258,6 +258,7 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
                                                     {"setups", c.setups},
                                                     {"iterations_max", c.itMax},
                                                     {"iterations_last", c.itLast},
+                                                    {"unconverged_solves", c.unconverged},
                                                     {"have_old", c.haveOld ? 1 : 0},
                                                     {"rates_stale", c.ratesStale ? 1 : 0}};
   for (const auto& [k, v] : ints) file.setAttribute(group, k, v);
@@ -300,6 +301,11 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
   c.setups = file.attributeInt(group, "setups");
   c.itMax = file.attributeInt(group, "iterations_max");
   c.itLast = file.attributeInt(group, "iterations_last");
+  try {  // absent from checkpoints written before it was counted
+    c.unconverged = file.attributeInt(group, "unconverged_solves");
+  } catch (const Error&) {
+    c.unconverged = 0;
+  }
   c.haveOld = file.attributeInt(group, "have_old") != 0;
   c.ratesStale = file.attributeInt(group, "rates_stale") != 0;
   fluid.restoreState(c);

@@ -212,7 +212,7 @@ void FluidSolver::restoreState(const FluidCounters& c) {
   m.setupsOffset = c.setups - m.ps->setups();
   m.itMax = static_cast<int>(c.itMax);
   m.itLast = static_cast<int>(c.itLast);
-  m.unconverged = c.unconverged;  // a re-balance keeps it; a checkpoint does not store it
+  m.unconverged = c.unconverged;  // kept by a re-balance and in checkpoints
   m.haveOld = c.haveOld;
   m.ratesStale = c.ratesStale;
   m.inLocal = m.outLocal = m.dVolLocal = m.dVolGrossLocal = 0;
