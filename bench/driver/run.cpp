@@ -363,7 +363,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
     onRoot(world, [&] {
       if (opts.restart.empty()) return;
       if (const std::string why = notRegularFile(opts.restart); !why.empty())
-        throw ConfigError("--restart", "'" + opts.restart + "' " + why);
+        throw ConfigError("--restart",
+                          "'" + opts.restart + (why == "no such file" ? "': " : "' ") + why);
     });
   });
   if (!v.failed())

@@ -652,7 +652,7 @@ Config Config::load(const Comm& comm, const std::string& path,
     // descriptor is checked again after the non-blocking open (a file swapped in meanwhile).
     const std::string problem = notRegularFile(path);
     int fd = -1;
-    if (problem == "does not exist")
+    if (problem == "no such file")
       err = "cannot open case file '" + path + "': no such file";
     else if (!problem.empty())
       err = "case file '" + path + "' " + problem;

@@ -24,7 +24,7 @@ std::string kindProblem(mode_t mode) {
 std::string notRegularFile(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
-    if (errno == ENOENT) return "does not exist";
+    if (errno == ENOENT) return "no such file";
     return std::string("cannot be read: ") + std::strerror(errno);
   }
   return kindProblem(st.st_mode);

@@ -97,7 +97,6 @@ H5File H5File::openRead(const Comm& comm, const std::string& path) {
   collective(comm, path, [&] {
     // A regular file only: H5Fopen of a FIFO would wait for a writer (coloc/core/files.hpp).
     const std::string problem = notRegularFile(path);
-    if (problem == "does not exist") throw LocalFailure("no such file");
     if (!problem.empty()) throw LocalFailure(problem);
   });
   const FlatComm flat(comm.raw());

@@ -8,9 +8,9 @@
 
 namespace coloc {
 
-/// "" when `path` names a regular file (a symbolic link to one is fine); otherwise why not, as
-/// the end of a sentence that starts with the path: "does not exist", "is a directory, not a
-/// file", "is a FIFO (named pipe), not a regular file", ... Rank-local.
+/// "" when `path` names a regular file (a symbolic link to one is fine); otherwise why not:
+/// "no such file", or the end of a sentence that starts with the path ("is a directory, not a
+/// file", "is a FIFO (named pipe), not a regular file", ...). Rank-local.
 std::string notRegularFile(const std::string& path);
 
 /// The same for an open descriptor (after open(), against a file swapped in meanwhile).
