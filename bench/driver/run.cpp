@@ -20,12 +20,14 @@
 #include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
 #include "coloc/core/fault.hpp"
+#include "coloc/core/files.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/checkpoint.hpp"
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
 #include "diagnostics.hpp"
+#include "run_folder.hpp"
 
 namespace coloc {
 namespace {
@@ -247,31 +249,6 @@ void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet) {
                  script.string().c_str(), rc);
 }
 
-/// Rank 0, before anything is written: what a previous run left that would not tell the truth
-/// about this one: its report.json and series.csv, and the .tmp files of writes it did not finish
-/// (checkpoints, output, report). Checkpoints and field output are kept.
-void removeStaleFiles(const std::string& outDir, const OutputOptions& out,
-                      const CheckpointOptions& ck) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::remove(fs::path(outDir) / "report.json", ec);
-  fs::remove(fs::path(outDir) / "series.csv", ec);
-  std::vector<fs::path> dirs{outDir, out.dir, fs::path(ck.path).parent_path()};
-  for (const auto& dir : dirs) {
-    if (dir.empty() || !fs::is_directory(dir, ec)) continue;
-    for (const auto& entry : fs::directory_iterator(dir, ec)) {
-      const std::string name = entry.path().filename().string();
-      const auto endsWith = [&](const char* tail) {
-        const std::string t = tail;
-        return name.size() >= t.size() && name.compare(name.size() - t.size(), t.size(), t) == 0;
-      };
-      if (endsWith(".h5.tmp") || endsWith(".xmf.tmp") || endsWith(".json.tmp") ||
-          endsWith(".csv.tmp") || name == "rebalance.tmp.h5")
-        fs::remove(entry.path(), ec);
-    }
-  }
-}
-
 /// The stop signal received so far (0: none); set by the handler installStopSignals() puts in.
 volatile std::sig_atomic_t stopSignal = 0;
 
@@ -379,6 +356,27 @@ FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& 
   return channel.agree(err, code, static_cast<int>(stopSignal), where ? *where : 0);
 }
 
+/// Runs `f` on rank 0 only and throws its coloc::Error (an IoError as one) on every rank, so
+/// that a check only rank 0 makes (the output folder, its lock) is reported like an input error
+/// every rank found, without a "rank 0:" prefix. Collective.
+template <class F>
+void onRoot(const Comm& world, F&& f) {
+  std::string err;
+  if (world.isRoot()) {
+    try {
+      f();
+    } catch (const IoError& e) {
+      err = std::string("I") + e.what();
+    } catch (const std::exception& e) {  // a coloc::Error, or std::filesystem's
+      err = std::string("E") + e.what();
+    }
+  }
+  err = world.broadcast(err);
+  if (err.empty()) return;
+  if (err[0] == 'I') throw IoError(err.substr(1));
+  throw Error(err.substr(1));
+}
+
 }  // namespace
 
 void libraryAborted() {
@@ -460,13 +458,43 @@ int runCase(const Comm& world, const RunOptions& opts) {
     if (root) std::fprintf(stderr, "coloc: error: %s%s\n", before.c_str(), v.message.c_str());
   };
 
-  // 1. The output folder (rank 0), and what a previous run left there that would mislead.
-  auto v = phase(channel, kIoErrorStatus, [&] {
-    if (!root) return;
-    makeDirectories(outDir);
-    removeStaleFiles(outDir, outputOptions, checkpoint);
-    fault::point("outdir", 0);
+  // 1. The output folders (rank 0): made; locked against a second run for as long as this one
+  // lasts; the checkpoint kept inside them and off the --restart file; what a previous run left
+  // there that would mislead removed. A --restart that is no regular file (a FIFO would block the
+  // read) is refused before anything is made.
+  const RunFolders folders{outDir, outputOptions.dir, cfg.string("output.checkpoint_file")};
+  FolderLocks locks;
+  auto v = phase(channel, kInputErrorStatus, [&] {
+    onRoot(world, [&] {
+      if (opts.restart.empty()) return;
+      if (const std::string why = notRegularFile(opts.restart); !why.empty())
+        throw ConfigError("--restart",
+                          "'" + opts.restart + (why == "no such file" ? "': " : "' ") + why);
+    });
   });
+  if (!v.failed())
+    v = phase(channel, kIoErrorStatus, [&] {
+      onRoot(world, [&] {
+        makeDirectories(outDir);
+        makeDirectories(folders.dataDir);
+      });
+    });
+  if (!v.failed())
+    v = phase(channel, kInputErrorStatus, [&] {
+      onRoot(world, [&] {
+        locks.lock(outDir, "--out", opts.casePath);
+        std::error_code ec;
+        if (!std::filesystem::equivalent(outDir, folders.dataDir, ec))
+          locks.lock(folders.dataDir, "output.dir", opts.casePath);
+        checkRunFiles(folders, opts.restart);
+      });
+    });
+  if (!v.failed())
+    v = phase(channel, kIoErrorStatus, [&] {
+      if (!root) return;
+      removeStaleFiles(folders);
+      fault::point("outdir", 0);
+    });
   if (v.failed()) {
     say(v, "");
     return v.code;

@@ -1,14 +1,20 @@
 #include "coloc/core/config.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
+
+#include "coloc/core/files.hpp"
 
 namespace coloc {
 namespace {
@@ -427,6 +433,55 @@ std::string Schema::describe(const std::string& prefix) const {
   return os.str();
 }
 
+namespace {
+
+/// Thrown by the parser callbacks when a value opens more than kMaxJsonDepth levels of lists and
+/// objects; the caller turns it into a ConfigError with the position (tooDeepAt).
+struct TooDeep {};
+
+/// The offset in `text` of the '[' or '{' that opens level kMaxJsonDepth + 1 (strings and, when
+/// `comments`, // and /* */ comments skipped); npos when there is none. One pass, only after
+/// the parser has stopped at that depth.
+std::size_t tooDeepAt(const std::string& text, bool comments) {
+  int depth = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      for (++i; i < text.size() && text[i] != '"'; ++i)
+        if (text[i] == '\\') ++i;
+    } else if (comments && c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      i = text.find('\n', i);
+      if (i == std::string::npos) return i;
+    } else if (comments && c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      i = text.find("*/", i + 2);
+      if (i == std::string::npos) return i;
+      ++i;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return std::string::npos;
+}
+
+/// "line L, column C (byte offset O)" of offset `at` in `text`.
+std::string lineColumn(const std::string& text, std::size_t at) {
+  if (at == std::string::npos || at >= text.size()) return "an unknown position";
+  const auto line =
+      1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+  const auto bol = text.rfind('\n', at);
+  const std::size_t column = at - (bol == std::string::npos ? 0 : bol + 1) + 1;
+  return "line " + std::to_string(line) + ", column " + std::to_string(column) + " (byte offset " +
+         std::to_string(at) + ")";
+}
+
+std::string tooDeepText() {
+  return "lists and objects nested deeper than " + std::to_string(kMaxJsonDepth) + " levels";
+}
+
+}  // namespace
+
 void applyOverride(Json& doc, const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
@@ -435,8 +490,19 @@ void applyOverride(Json& doc, const std::string& assignment) {
   const std::string text = assignment.substr(eq + 1);
   Json value;
   try {
-    value = Json::parse(text);
-  } catch (const std::exception&) {
+    // Bounded nesting (a value of --set is a few levels deep; a deeper one is refused at
+    // kMaxJsonDepth, before it is read whole).
+    value = Json::parse(text, [](int depth, Json::parse_event_t ev, Json&) {
+      using E = Json::parse_event_t;
+      if ((ev == E::object_start || ev == E::array_start) && depth >= kMaxJsonDepth)
+        throw TooDeep{};
+      return true;
+    });
+  } catch (const TooDeep&) {
+    throw ConfigError(path.empty() ? "--set" : path,
+                      "the --set value has " + tooDeepText() + " (at character " +
+                          std::to_string(tooDeepAt(text, false) + 1) + " of the value)");
+  } catch (const Json::exception&) {
     value = text;  // a bare word is a string
   }
   Json* node = &doc;
@@ -474,6 +540,7 @@ class DuplicateKeyCheck {
     switch (ev) {
       case E::object_start:
       case E::array_start:
+        if (frames_.size() >= static_cast<std::size_t>(kMaxJsonDepth)) throw TooDeep{};
         frames_.push_back(Frame{ev == E::array_start, childPath(), {}, {}, 0});
         break;
       case E::key: {
@@ -561,6 +628,10 @@ Config Config::fromText(const std::string& text, const std::string& source,
     throw ConfigError("", source + ": number " + (token.empty() ? "" : "'" + token + "' ") +
                               "is beyond what a double holds (about 1.8e308)" +
                               (where.empty() ? "" : " at " + where));
+  } catch (const TooDeep&) {
+    throw ConfigError("", source + ": " + tooDeepText() + " at " +
+                              lineColumn(text, tooDeepAt(text, true)) +
+                              ": a case file is a few levels deep");
   } catch (const Json::parse_error& e) {
     std::string what = e.what();
     const auto pos = what.find("parse error");
@@ -576,30 +647,39 @@ Config Config::load(const Comm& comm, const std::string& path,
                     const std::vector<std::string>& overrides, const Schema& schema) {
   std::string text, err;
   if (comm.isRoot()) {
-    std::error_code ec;
-    std::ifstream in;
-    if (std::filesystem::is_directory(path, ec))
-      err = "case file '" + path + "' is a directory, not a file";
-    else
-      in.open(path, std::ios::binary);
-    if (err.empty() && !in) {
-      err = "cannot open case file '" + path + "'";
-    } else if (err.empty()) {
-      // Bounded: a case file is a few kB; /dev/zero or a data file given by mistake is refused
-      // rather than read until memory runs out.
+    // A regular file only: stat() before open(), so that a FIFO, a device or a socket is refused
+    // by name instead of blocking the run (or reading /dev/zero until the size limit); the
+    // descriptor is checked again after the non-blocking open (a file swapped in meanwhile).
+    const std::string problem = notRegularFile(path);
+    int fd = -1;
+    if (problem == "no such file")
+      err = "cannot open case file '" + path + "': no such file";
+    else if (!problem.empty())
+      err = "case file '" + path + "' " + problem;
+    else if ((fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC)) < 0)
+      err = "cannot open case file '" + path + "': " + std::strerror(errno);
+    else if (const std::string again = notRegularFile(fd); !again.empty())
+      err = "case file '" + path + "' " + again;
+    if (err.empty()) {
+      // Bounded: a case file is a few kB; a data file given by mistake is refused rather than
+      // read until memory runs out.
       std::vector<char> buf(1 << 16);
-      while (in && text.size() <= kMaxCaseFileBytes) {
-        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-        text.append(buf.data(), static_cast<std::size_t>(in.gcount()));
+      while (text.size() <= kMaxCaseFileBytes) {
+        const ssize_t n = ::read(fd, buf.data(), buf.size());
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+          err = "cannot read case file '" + path + "': " + std::strerror(errno);
+          break;
+        }
+        if (n == 0) break;
+        text.append(buf.data(), static_cast<std::size_t>(n));
       }
-      if (text.size() > kMaxCaseFileBytes) {
+      if (err.empty() && text.size() > kMaxCaseFileBytes)
         err = "case file '" + path + "' is larger than " + std::to_string(kMaxCaseFileBytes >> 20) +
               " MiB: not a case file";
-        text.clear();
-      } else if (in.bad()) {
-        err = "cannot read case file '" + path + "'";
-      }
+      if (!err.empty()) text.clear();
     }
+    if (fd >= 0) ::close(fd);
   }
   err = comm.broadcast(err);
   if (!err.empty()) throw ConfigError("", err);

@@ -13,6 +13,7 @@
 #include "coloc/core/run_config.hpp"
 #include "coloc/coupling/self_velocity.hpp"
 #include "coloc/fv/fluid.hpp"
+#include "coloc/io/checkpoint_file.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -257,6 +258,10 @@ double inflowWaitingCount(const Config& cfg) {
 std::vector<std::string> checkCase(const Config& cfg) {
   std::vector<std::string> notes;
   checkName(cfg);
+  // The checkpoint stays inside the output folder and is none of the run's own files.
+  if (const std::string why = checkpointFileProblem(cfg.string("output.checkpoint_file"));
+      !why.empty())
+    throw ConfigError("output.checkpoint_file", why);
   checkTimeSteps(cfg, notes);
   checkBoundaries(cfg, notes);
   checkInflow(cfg);

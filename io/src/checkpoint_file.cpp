@@ -13,11 +13,79 @@ CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::stri
   CheckpointOptions o;
   o.intervalSteps = cfg.integer("output.checkpoint_interval");
   o.onFailure = cfg.boolean("output.checkpoint_on_failure");
-  const std::filesystem::path file = cfg.string("output.checkpoint_file");
-  if (file.empty()) throw ConfigError("output.checkpoint_file", "empty file name");
+  const std::string file = cfg.string("output.checkpoint_file");
+  if (const std::string why = checkpointFileProblem(file); !why.empty())
+    throw ConfigError("output.checkpoint_file", why);
   const std::string dir = outputOptionsFromConfig(cfg, runOutDir).dir;
-  o.path = file.is_absolute() ? file.string() : (std::filesystem::path(dir) / file).string();
+  o.path = (std::filesystem::path(dir) / std::filesystem::path(file).lexically_normal()).string();
   return o;
+}
+
+namespace {
+
+bool endsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+/// `name` is PREFIX + six or more digits + SUFFIX.
+bool stepName(const std::string& name, const std::string& prefix, const std::string& suffix) {
+  if (name.size() < prefix.size() + 6 + suffix.size()) return false;
+  if (name.compare(0, prefix.size(), prefix) != 0 || !endsWith(name, suffix)) return false;
+  for (std::size_t i = prefix.size(); i < name.size() - suffix.size(); ++i)
+    if (name[i] < '0' || name[i] > '9') return false;
+  return true;
+}
+
+}  // namespace
+
+bool matchesStepPattern(const std::string& name, const std::string& pattern) {
+  const std::string key = "{step}";
+  const auto at = pattern.find(key);
+  if (at == std::string::npos) return name == pattern;
+  return stepName(name, pattern.substr(0, at), pattern.substr(at + key.size()));
+}
+
+std::string runFileRole(const std::string& name) {
+  if (name == "report.json") return "the run's report (report.json)";
+  if (name == "series.csv") return "the run's time series (series.csv)";
+  if (name == "snapshot.png") return "the run's snapshot picture (snapshot.png)";
+  if (name == "fields.xmf" || name == "particles.xmf") return "the run's XDMF index (" + name + ")";
+  if (stepName(name, "fields_", ".h5") || stepName(name, "particles_", ".h5"))
+    return "the run's output file of one step (fields_NNNNNN.h5, particles_NNNNNN.h5)";
+  if (name == "rebalance.tmp.h5") return "the run's re-balancing scratch file (rebalance.tmp.h5)";
+  if (name == kRunLockFile) return std::string("the output folder's lock (") + kRunLockFile + ")";
+  if (endsWith(name, ".tmp")) return "a temporary file of a write in progress (NAME.tmp)";
+  const std::filesystem::path p(name);
+  if (endsWith(p.stem().string(), ".failed"))
+    return "the state of a failed run (NAME.failed.h5, output.checkpoint_on_failure)";
+  return "";
+}
+
+std::string checkpointFileProblem(const std::string& file) {
+  namespace fs = std::filesystem;
+  const std::string q = "'" + file + "'";
+  if (file.empty()) return "empty file name";
+  const fs::path p(file);
+  if (p.is_absolute())
+    return q +
+           " is an absolute path: a checkpoint is written inside the run's output folder "
+           "(output.dir, by default the --out folder); give a name relative to it";
+  for (const auto& part : p)
+    if (part == "..")
+      return q +
+             " leaves the run's output folder (a '..' part): a checkpoint is written inside it "
+             "(output.dir, by default the --out folder)";
+  const fs::path normal = p.lexically_normal();
+  if (!normal.has_filename() || normal.filename() == "." || file.back() == '/')
+    return q + " names a folder, not a file";
+  // The name with {step} as a step: what the run's own files would be called at that step.
+  std::string name = normal.filename().string();
+  if (const auto at = name.find("{step}"); at != std::string::npos) name.replace(at, 6, "000000");
+  if (const std::string role = runFileRole(name); !role.empty())
+    return q + " is the name of " + role +
+           ", which the run writes or removes itself: choose another name (e.g. checkpoint.h5, "
+           "ck_{step}.h5)";
+  return "";
 }
 
 std::string CheckpointOptions::pathAt(long long step) const {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "coloc/core/failure.hpp"
+#include "coloc/core/files.hpp"
 #include "coloc/io/h5io.hpp"
 #include "h5detail.hpp"
 
@@ -94,7 +95,9 @@ H5File H5File::openRead(const Comm& comm, const std::string& path) {
   f.root_ = comm.isRoot();
   hid_t id = -1;
   collective(comm, path, [&] {
-    if (!std::filesystem::exists(path)) throw LocalFailure("no such file");
+    // A regular file only: H5Fopen of a FIFO would wait for a writer (coloc/core/files.hpp).
+    const std::string problem = notRegularFile(path);
+    if (!problem.empty()) throw LocalFailure(problem);
   });
   const FlatComm flat(comm.raw());
   collective(comm, path, [&] {

@@ -44,7 +44,9 @@ void declareOutputConfig(Schema& s) {
   s.string("output.checkpoint_file", "checkpoint.h5",
            "checkpoint file, relative to output.dir; each checkpoint replaces it atomically "
            "(written as FILE.tmp, renamed when complete); {step} in the name is replaced by the "
-           "zero-padded step to keep every checkpoint (e.g. ck_{step}.h5)");
+           "zero-padded step to keep every checkpoint (e.g. ck_{step}.h5); it stays inside "
+           "output.dir (no absolute path, no '..') and is none of the run's own files "
+           "(report.json, series.csv, fields_*.h5, ...)");
   s.boolean("output.checkpoint_on_failure", true,
             "when the run fails (NaN, CFL, a particle leaving the box, ...), write the state at "
             "the failure to FILE with .failed before .h5 (status attribute 'failed: ...'); the "

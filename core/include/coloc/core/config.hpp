@@ -98,6 +98,9 @@ class Schema {
 
 /// Case files larger than this are refused unread (a case file is a few kB).
 inline constexpr std::size_t kMaxCaseFileBytes = std::size_t{64} << 20;
+/// Lists and objects nested deeper than this in a case file or a --set value are refused (with
+/// the file and line, or the key), as soon as the parser reaches that depth.
+inline constexpr int kMaxJsonDepth = 64;
 
 /// A validated, resolved case. Accessors take a dotted path into the resolved JSON.
 class Config {

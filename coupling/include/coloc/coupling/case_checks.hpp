@@ -14,6 +14,8 @@ namespace coloc::coupling {
 
 /// Cross-key checks; throws ConfigError naming the keys:
 ///  - name: a plain name (it becomes the folder out/<name>): not empty, no '/', not . or ..;
+///  - output.checkpoint_file: inside the output folder (not absolute, no ".."), and none of the
+///    run's own files (report.json, series.csv, fields_*.h5, ...; io/checkpoint_file.hpp);
 ///  - a coupled run with a fixed fluid.dt that is not a whole multiple of particles.dt (the CFD
 ///    step is a whole number of DEM steps; the run would silently use another step);
 ///  - an inlet with no outlet face (the inflow has nowhere to go);

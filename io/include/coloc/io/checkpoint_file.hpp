@@ -23,8 +23,26 @@ struct CheckpointOptions {
   std::string pathAt(long long step) const;
 };
 
-/// The checkpoint options of a case (paths resolved like outputOptionsFromConfig).
+/// The checkpoint options of a case (paths resolved like outputOptionsFromConfig). Throws
+/// ConfigError naming output.checkpoint_file when checkpointFileProblem() refuses it.
 CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::string& runOutDir);
+
+/// Why `file` (output.checkpoint_file) cannot be a checkpoint name; "" when it can. A checkpoint
+/// stays inside its folder (output.dir): not empty, not absolute, no ".." part, not a folder;
+/// and it is none of the run's own files (runFileRole, with {step} as any step).
+std::string checkpointFileProblem(const std::string& file);
+
+/// The lock file of a run's output folder (held by rank 0 while the run lasts).
+inline constexpr const char* kRunLockFile = ".coloc.lock";
+
+/// What `name` (a file name, no folder) is among the files a run writes or removes in its
+/// folders: "the report (report.json)", "a field output file", "a temporary file of a write in
+/// progress (*.tmp)", ...; "" when it is none of them. Checkpoint names are the caller's.
+std::string runFileRole(const std::string& name);
+
+/// True when `name` is `pattern` (a file name, no folder) with "{step}" replaced by a step of
+/// six or more digits, or `pattern` itself when it has no "{step}".
+bool matchesStepPattern(const std::string& name, const std::string& pattern);
 /// Where a failed run's state goes: "DIR/checkpoint.h5" -> "DIR/checkpoint.failed.h5".
 std::string failedCheckpointPath(const std::string& path);
 

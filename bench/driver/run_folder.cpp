@@ -1,0 +1,130 @@
+// The folders of a `coloc run`: lock, checks, clean-up (run_folder.hpp).
+#include "run_folder.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+
+#include "coloc/core/error.hpp"
+
+namespace coloc {
+namespace fs = std::filesystem;
+
+FolderLocks::~FolderLocks() {
+  for (int fd : fds_) ::close(fd);  // releases the lock; the file stays (see lock())
+}
+
+void FolderLocks::lock(const std::string& dir, const std::string& key,
+                       const std::string& casePath) {
+  const std::string path = (fs::path(dir) / kRunLockFile).string();
+  // The file is never removed: removing it at the end would let a run that opened it meanwhile
+  // lock a file no one else sees. Holding the flock, not the file's presence, is the lock, so a
+  // run that was killed leaves nothing stale.
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd < 0)
+    throw IoError("cannot create the lock file '" + path +
+                  "' of the output folder: " + std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    if (e != EWOULDBLOCK) {
+      ::close(fd);
+      throw IoError("cannot lock '" + path + "' (the output folder's lock): " + std::strerror(e));
+    }
+    char buf[512];
+    const ssize_t n = ::pread(fd, buf, sizeof buf - 1, 0);
+    ::close(fd);
+    std::string holder = n > 0 ? std::string(buf, static_cast<std::size_t>(n)) : "";
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == '\r')) holder.pop_back();
+    if (holder.empty()) holder = "a process that has not yet written its name";
+    throw ConfigError(key, "the output folder '" + dir + "' is in use by another coloc run (" +
+                               holder + "; lock file " + path +
+                               "): wait until it ends, or give another folder");
+  }
+  char host[256] = "?";
+  ::gethostname(host, sizeof host - 1);
+  host[sizeof host - 1] = '\0';
+  const std::time_t now = std::time(nullptr);
+  char when[64] = "?";
+  std::tm tm{};
+  if (::gmtime_r(&now, &tm)) std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S UTC", &tm);
+  const std::string who = "pid " + std::to_string(::getpid()) + " on host " + host + ", started " +
+                          when + ", case " + casePath + "\n";
+  if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, who.data(), who.size(), 0) < 0) {
+    // The lock is held; only the note of who holds it is missing.
+  }
+  fds_.push_back(fd);
+}
+
+namespace {
+
+/// `child` lies in `parent` (both canonical) or is it.
+bool inside(const fs::path& child, const fs::path& parent) {
+  const fs::path rel = child.lexically_relative(parent);
+  return !rel.empty() && *rel.begin() != "..";
+}
+
+}  // namespace
+
+void checkRunFiles(const RunFolders& f, const std::string& restart) {
+  const fs::path data = fs::canonical(f.dataDir);
+  const fs::path out = fs::canonical(f.outDir);
+  const fs::path rel = fs::path(f.checkpointFile).lexically_normal();
+  // The checkpoint's folder, with every symbolic link on the way resolved: still in output.dir.
+  const fs::path ckDir = fs::weakly_canonical(data / rel.parent_path());
+  if (!inside(ckDir, data))
+    throw ConfigError("output.checkpoint_file",
+                      "'" + f.checkpointFile + "' leaves the run's output folder '" + f.dataDir +
+                          "' through a symbolic link (its folder is '" + ckDir.string() +
+                          "'): a checkpoint is written inside the output folder");
+  if (restart.empty()) return;
+  // --restart is read, and may be anywhere; but not a file this run writes over or removes
+  // (other than its own checkpoint, which a restart in place continues).
+  std::error_code ec;
+  const fs::path r = fs::weakly_canonical(restart, ec);
+  if (ec) return;  // the restart's own check names the problem
+  const fs::path dir = r.parent_path();
+  const std::string name = r.filename().string();
+  if (dir == ckDir && matchesStepPattern(name, rel.filename().string())) return;
+  if (dir != data && dir != out && dir != ckDir) return;
+  if (const std::string role = runFileRole(name); !role.empty())
+    throw ConfigError("--restart", "'" + restart + "' is " + role +
+                                       " in this run's output folder, which the run writes or "
+                                       "removes: copy it elsewhere and restart from the copy");
+}
+
+void removeStaleFiles(const RunFolders& f) {
+  std::error_code ec;
+  const fs::path out(f.outDir), data(f.dataDir);
+  for (const char* name : {"report.json", "series.csv", "report.json.tmp", "series.csv.tmp",
+                           "rebalance.tmp.h5", "rebalance.tmp.h5.tmp"})
+    fs::remove(out / name, ec);
+  const fs::path rel = fs::path(f.checkpointFile).lexically_normal();
+  const std::string ck = rel.filename().string() + ".tmp";
+  const std::string failed = fs::path(failedCheckpointPath(rel.filename().string())).string();
+  const auto isStaleTmp = [&](const std::string& name, bool dataFolder, bool ckFolder) {
+    if (dataFolder && (name == "fields.xmf.tmp" || name == "particles.xmf.tmp" ||
+                       matchesStepPattern(name, "fields_{step}.h5.tmp") ||
+                       matchesStepPattern(name, "particles_{step}.h5.tmp")))
+      return true;
+    return ckFolder && (matchesStepPattern(name, ck) || matchesStepPattern(name, failed + ".tmp"));
+  };
+  const fs::path ckDir = data / rel.parent_path();
+  const bool same = fs::equivalent(data, ckDir, ec);
+  const auto scan = [&](const fs::path& dir, bool dataFolder, bool ckFolder) {
+    if (!fs::is_directory(dir, ec)) return;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (isStaleTmp(name, dataFolder, ckFolder)) fs::remove(entry.path(), ec);
+    }
+  };
+  scan(data, true, same);
+  if (!same) scan(ckDir, false, true);
+}
+
+}  // namespace coloc
