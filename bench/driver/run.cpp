@@ -27,6 +27,7 @@
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
 #include "diagnostics.hpp"
+#include "restart_account.hpp"
 #include "run_folder.hpp"
 
 namespace coloc {
@@ -289,45 +290,6 @@ struct LastWords {
 };
 LastWords lastWords;
 
-/// The keys whose values differ between two resolved configurations: dotted paths (list entries
-/// by index), each with both values; a list of numbers is one value.
-void diffConfig(const Json& a, const Json& b, const std::string& path,
-                std::vector<std::pair<std::string, std::pair<Json, Json>>>& out) {
-  const auto objectLike = [](const Json& j) {
-    return j.is_object() || (j.is_array() && !j.empty() && j.front().is_object());
-  };
-  if (objectLike(a) && objectLike(b) && a.type() == b.type()) {
-    if (a.is_array() && a.size() != b.size()) {
-      out.push_back({path, {Json(a.size()), Json(b.size())}});
-      return;
-    }
-    if (a.is_array()) {
-      for (std::size_t i = 0; i < a.size(); ++i)
-        diffConfig(a[i], b[i], path + "." + std::to_string(i), out);
-      return;
-    }
-    for (const auto& [k, v] : a.items())
-      diffConfig(v, b.contains(k) ? b[k] : Json(), path.empty() ? k : path + "." + k, out);
-    for (const auto& [k, v] : b.items())
-      if (!a.contains(k)) diffConfig(Json(), v, path.empty() ? k : path + "." + k, out);
-    return;
-  }
-  if (a != b) out.push_back({path, {a, b}});
-}
-
-/// What a restart keeps from its checkpoint although the case gives another value: what is
-/// baked into the state (the particles: their sources, radii and masses, i.e. the materials'
-/// density; the fluid's initial condition). Every other key is taken from the case.
-bool keptFromCheckpoint(const std::string& key) {
-  const auto under = [&](const char* p) {
-    const std::string s(p);
-    return key == s || key.rfind(s + ".", 0) == 0;
-  };
-  if (under("particles.sources") || under("particles.seed") || under("fluid.initial_velocity"))
-    return true;
-  return key.rfind("particles.materials.", 0) == 0 && key.ends_with(".density");
-}
-
 /// Runs `f` on every rank and agrees on the outcome at its end (coloc/core/failure.hpp): the
 /// exit status by the error's type (IoError: kIoErrorStatus, other coloc::Error: `errorCode`,
 /// anything else: kRunFailedStatus), the message of the lowest failing rank, and `where`, a
@@ -568,59 +530,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
       std::fflush(stdout);
     }
     if (!opts.restart.empty()) {
-      // What the restart keeps from its checkpoint and what it takes from the case, key by key
-      // (docs/robustness.md, "Restarts: what comes from where").
-      const coupling::CheckpointInfo info = coupling::readCheckpointInfo(world, opts.restart);
-      Json stored;
-      try {
-        stored = Json::parse(info.config);
-      } catch (const std::exception&) {
-        stored = Json::object();
-      }
-      std::vector<std::pair<std::string, std::pair<Json, Json>>> diff;
-      diffConfig(stored, cfg.json(), "", diff);
-      Json kept = Json::object(), taken = Json::object();
-      std::string keptText, takenText;
-      for (const auto& [key, values] : diff) {
-        if (key == "description" || key == "name") continue;
-        const bool keep = keptFromCheckpoint(key);
-        (keep ? kept : taken)[key] = {{"checkpoint", values.first}, {"case", values.second}};
-        std::string& text = keep ? keptText : takenText;
-        if (!text.empty()) text += ", ";
-        text += key + " (" + values.first.dump() + " -> " + values.second.dump() + ")";
-      }
-      restartReport = {{"checkpoint", opts.restart},
-                       {"step", info.steps},
-                       {"time", info.time},
-                       {"kept_from_checkpoint", kept},
-                       {"taken_from_case", taken}};
-      if (root && !diff.empty()) {
-        if (!keptText.empty())
-          std::printf(
-              "coloc: note: restart: kept from the checkpoint (in its particles and fields), "
-              "not the case's values: %s\n",
-              keptText.c_str());
-        if (!takenText.empty())
-          std::printf("coloc: note: restart: taken from the case (checkpoint -> case): %s\n",
-                      takenText.c_str());
-        std::fflush(stdout);
-      }
-      // A restart at or past the end runs nothing: refused rather than an empty success.
-      const long long runSteps = cfg.integer("run.steps");
-      const double endTime = cfg.number("run.end_time");
-      if (runSteps > 0 && simulation->steps() >= runSteps)
-        throw ConfigError("run.steps", std::to_string(runSteps) + ": the checkpoint " +
-                                           opts.restart + " is at step " +
-                                           std::to_string(simulation->steps()) +
-                                           " already, nothing to run (run.steps counts from the "
-                                           "initial condition: give more steps)");
-      if (runSteps == 0 && simulation->time() >= endTime * (1.0 - 1e-12)) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "%.9g s: the checkpoint is at t = %.9g s", endTime,
-                      simulation->time());
-        throw ConfigError("run.end_time", std::string(buf) + " (" + opts.restart +
-                                              ") already, nothing to run (give a later end)");
-      }
+      restartReport = accountRestart(world, opts.restart, cfg);
+      refuseEmptyRestart(cfg, opts.restart, simulation->steps(), simulation->time());
     }
     progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
     series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
