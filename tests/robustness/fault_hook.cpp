@@ -10,10 +10,13 @@
 //         kill       SIGKILL itself
 //         signal     SIGTERM itself (a stop request, as from a batch system)
 //         signal2    SIGTERM itself twice (the second exits at once)
+//         bad_alloc  throw std::bad_alloc (an allocation that failed in coloc's own code)
+//         abort      MPI_Abort(MPI_COMM_WORLD, -1), as hypre does when its allocation fails
 //   COLOC_TEST_KILL_IN_CHECKPOINT=N    the same as checkpoint:all:N:kill (tests of issue 8).
 #include <mpi.h>
 
 #include <csignal>
+#include <new>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -47,6 +50,8 @@ void hook(const char* point, long long step) {
   if (f.kind == "error") throw coloc::Error(what);
   if (f.kind == "io") throw coloc::IoError(what + ": No space left on device");
   if (f.kind == "exception") throw std::runtime_error(what);
+  if (f.kind == "bad_alloc") throw std::bad_alloc();
+  if (f.kind == "abort") MPI_Abort(MPI_COMM_WORLD, -1);
   if (f.kind == "kill") std::raise(SIGKILL);
   if (f.kind == "signal") std::raise(SIGTERM);
   if (f.kind == "signal2") {

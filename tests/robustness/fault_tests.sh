@@ -8,6 +8,10 @@
 #                            exit status is CODE, no stale report.json is left (a planted one
 #                            marked ok is gone; a report, if written, says "failed")
 #   blowup                   a blow-up: exit 3, report.json "failed" with the failed state
+#   oom KIND RANK            an allocation failing on RANK (bad_alloc in coloc's code on every
+#                            rank, or abort: hypre's MPI_Abort(-1) on rank 1): exit 3, "out of
+#                            memory", report.json "failed" with out_of_memory, no failed
+#                            checkpoint
 #   layout                   blocks of one cell on one rank (issue 15): exit 2, the key named
 #   outfile                  --out under a regular file: exit 4, "Not a directory"
 #   readonly                 --out on a read-only file system (a tmpfs remounted ro): exit 4
@@ -102,6 +106,28 @@ case $test in
     # a rank stopped by the deadline (MPI_Abort) may leave a .tmp, never a partial file under
     # the real name; the next run in the folder removes it
     files_good "$work/a" keep-tmp
+    run "$coloc" "$work/a" --set run.steps=1
+    [[ $rc -eq 0 ]] || { cat "$log"; fail "the next run in the folder failed"; }
+    files_good "$work/a"
+    ;;
+  oom)
+    # oom KIND RANK: an allocation that fails on RANK (1, or all) in the fluid phase of step 3,
+    # in coloc's own code (bad_alloc on every rank: they agree, exit 3; on one rank alone it is
+    # any one-rank failure, inject above) or inside hypre (abort on rank 1: hypre's
+    # MPI_Abort(-1), caught by the driver: exit 3 from that rank, which ends the job); both
+    # print "out of memory" and leave report.json "failed" with out_of_memory = true
+    kind=$1 rank=$2
+    mkdir -p "$work/a" && echo '{"status": "ok", "stale": true}' > "$work/a/report.json"
+    COLOC_FAULT="fluid:$rank:3:$kind" run "$faults" "$work/a" "${common[@]}"
+    cat "$log"
+    echo "exit $rc after $secs s"
+    [[ $rc -eq 3 ]] || fail "exit status $rc, expected 3"
+    grep -q "out of memory" "$log" || fail "no 'out of memory' in the output"
+    [[ $secs -le $((wait_s + 20)) ]] || fail "took $secs s to stop"
+    status_is "$work/a/report.json" failed
+    "$py" -c 'import json,sys; r=json.load(open(sys.argv[1])); sys.exit(0 if r.get("out_of_memory") is True and r.get("exit_code")==3 else 1)' \
+      "$work/a/report.json" || fail "report.json lacks out_of_memory = true and exit_code 3"
+    [[ -f $work/a/checkpoint.failed.h5 ]] && fail "a failed checkpoint was written out of memory"
     run "$coloc" "$work/a" --set run.steps=1
     [[ $rc -eq 0 ]] || { cat "$log"; fail "the next run in the folder failed"; }
     files_good "$work/a"
