@@ -16,8 +16,8 @@
 #include <mpi.h>
 
 #include <csignal>
-#include <new>
 #include <cstdlib>
+#include <new>
 #include <stdexcept>
 #include <string>
 
