@@ -228,11 +228,13 @@ void DemSolver::Impl::restore(DemState& st) {
   p.nOwned = n;
   p.nGhost = 0;
   // (id, x now) of every arrived row, by id: the particles sit at x0 for the rebuild below
-  std::vector<std::pair<std::int64_t, std::array<double, 3>>> xNow(n);
+  // (without x0 they sit at x, where they stay)
+  std::vector<std::pair<std::int64_t, std::array<double, 3>>> xNow;
   for (std::size_t i = 0; i < n; ++i) {
     const double* row = in.data() + i * R;
     detail::unpackRow(p, kOpState, row, i, true);
-    xNow[i] = {p.id[i], {p.x[0][i], p.x[1][i], p.x[2][i]}};
+    if (!withX0) continue;
+    xNow.push_back({p.id[i], {p.x[0][i], p.x[1][i], p.x[2][i]}});
     for (int d = 0; d < 3; ++d) p.x[d][i] = row[W + static_cast<std::size_t>(d)];
   }
   std::sort(xNow.begin(), xNow.end(),
@@ -307,7 +309,7 @@ void DemSolver::Impl::restore(DemState& st) {
       if (!bins.periodic[d]) (void)crossAxis(i, d, err);
   }
   comm.raiseIfAny(err);
-  {
+  if (withX0) {  // the ghosts to where their owners are now
     ScopedPhase g(timers, Phase::DemGhost);
     updateGhosts();
   }
