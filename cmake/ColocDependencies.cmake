@@ -1,9 +1,13 @@
 # Every dependency through find_package (the Debian packages: cmake/setup.sh; README.md).
-find_package(MPI REQUIRED COMPONENTS C CXX)
-set(HDF5_PREFER_PARALLEL ON)
-find_package(HDF5 REQUIRED COMPONENTS C)
-if(NOT HDF5_IS_PARALLEL)
-  message(FATAL_ERROR "coloc needs parallel HDF5 (Debian: libhdf5-openmpi-dev)")
+if(COLOC_SMPI)
+  include(ColocSmpi)  # MPI::MPI_C / MPI::MPI_CXX from SimGrid's SMPI; no HDF5
+else()
+  find_package(MPI REQUIRED COMPONENTS C CXX)
+  set(HDF5_PREFER_PARALLEL ON)
+  find_package(HDF5 REQUIRED COMPONENTS C)
+  if(NOT HDF5_IS_PARALLEL)
+    message(FATAL_ERROR "coloc needs parallel HDF5 (Debian: libhdf5-openmpi-dev)")
+  endif()
 endif()
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(nlohmann_json 3.10 REQUIRED)

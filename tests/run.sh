@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # tests/run.sh — what CI runs (.ci/run): install what is missing, build with warnings as errors
 # (-DCOLOC_WERROR=ON), check the C++ style against .clang-format (cmake/format.sh; --fix repairs
-# it), and run every test through CTest; then the unit, MPI and I/O tests again under
+# it), and run every test through CTest; then the SimGrid SMPI build's tests (label smpi: coloc
+# at 64 simulated ranks against the serial run; cmake/setup-smpi.sh builds it in build-smpi,
+# docs/smpi.md; COLOC_SMPI=0 skips it); then the unit, MPI and I/O tests again under
 # AddressSanitizer + UndefinedBehaviorSanitizer (a second build in build-sanitize;
 # COLOC_SANITIZE=0 skips it). clang-tidy is not run here (too slow for every push): CONTRIBUTING.md.
 # Extra arguments go to the first ctest run (e.g. -L validation, -R halo).
@@ -13,6 +15,12 @@ build=${COLOC_BUILD_DIR:-$root/build}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
 (cd "$build" && ctest --output-on-failure -j "$(nproc)" "$@")
+
+if [[ ${COLOC_SMPI:-1} != 0 && $# -eq 0 ]]; then
+  echo "tests/run.sh: the SimGrid SMPI build's tests ($root/build-smpi)"
+  "$root/cmake/setup-smpi.sh" "$root/build-smpi" -DCOLOC_WERROR=ON -DCOLOC_REFERENCE_BUILD="$build"
+  (cd "$root/build-smpi" && ctest --output-on-failure -j "$(nproc)" -L smpi)
+fi
 
 if [[ ${COLOC_SANITIZE:-1} != 0 && $# -eq 0 ]]; then
   sbuild=$root/build-sanitize

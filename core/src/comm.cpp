@@ -1,11 +1,19 @@
 #include "coloc/core/comm.hpp"
 
 #include <cstdio>
+#include <string_view>
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
 
 namespace coloc {
+
+bool mpiIsSimulated() {
+  char version[MPI_MAX_LIBRARY_VERSION_STRING] = {};
+  int len = 0;
+  MPI_Get_library_version(version, &len);
+  return std::string_view(version, static_cast<std::size_t>(len)).starts_with("SMPI");
+}
 
 MpiSession::MpiSession(int* argc, char*** argv) {
   int initialised = 0;

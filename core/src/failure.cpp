@@ -36,6 +36,11 @@ struct Watch {
   void ensureThread() {  // with m held
     if (started) return;
     started = true;
+    // Under SimGrid SMPI the ranks are threads of one process on simulated time: a wall-clock
+    // deadline would fire while the other ranks are merely being simulated, and an MPI call
+    // from a thread that is not a simulated rank is not allowed. SimGrid itself stops a
+    // simulation in which every rank waits (a deadlock).
+    if (mpiIsSimulated()) return;
     std::thread([this] { run(); }).detach();
   }
   void run() {

@@ -14,6 +14,7 @@
 #include "coloc/coupling/self_velocity.hpp"
 #include "coloc/fv/fluid.hpp"
 #include "coloc/io/checkpoint_file.hpp"
+#include "coloc/io/h5io.hpp"
 #include "coloc/partition/setup.hpp"
 
 namespace coloc::coupling {
@@ -255,9 +256,23 @@ double inflowWaitingCount(const Config& cfg) {
   return n;
 }
 
+/// A build without HDF5 (SimGrid SMPI) refuses the keys that would write files, before the run.
+void checkFileKeys(const Config& cfg) {
+  if (hdf5Available()) return;
+  const char* why =
+      "HDF5 files are not available in this build of coloc (SimGrid SMPI, COLOC_SMPI=ON): set it "
+      "to 0, or run the Open MPI build";
+  if (cfg.integer("output.interval_steps") > 0 &&
+      (cfg.boolean("output.fields") || cfg.boolean("output.particles")))
+    throw ConfigError("output.interval_steps", why);
+  if (cfg.integer("output.checkpoint_interval") > 0)
+    throw ConfigError("output.checkpoint_interval", why);
+}
+
 std::vector<std::string> checkCase(const Config& cfg) {
   std::vector<std::string> notes;
   checkName(cfg);
+  checkFileKeys(cfg);
   // The checkpoint stays inside the output folder and is none of the run's own files.
   if (const std::string why = checkpointFileProblem(cfg.string("output.checkpoint_file"));
       !why.empty())

@@ -12,7 +12,8 @@ namespace coloc {
 CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::string& runOutDir) {
   CheckpointOptions o;
   o.intervalSteps = cfg.integer("output.checkpoint_interval");
-  o.onFailure = cfg.boolean("output.checkpoint_on_failure");
+  // A build without HDF5 (SimGrid SMPI) has no failure checkpoint to write.
+  o.onFailure = cfg.boolean("output.checkpoint_on_failure") && hdf5Available();
   const std::string file = cfg.string("output.checkpoint_file");
   if (const std::string why = checkpointFileProblem(file); !why.empty())
     throw ConfigError("output.checkpoint_file", why);

@@ -50,36 +50,6 @@ void silenceHdf5() {
   (void)done;
 }
 
-/// What the failed system call said, for the errors a user can act on (errno of the last call;
-/// set to 0 before the HDF5 call by ioCollective).
-std::string ioReason() {
-  switch (errno) {
-    case ENOSPC:
-    case EDQUOT:
-    case EFBIG:
-    case EROFS:
-    case EACCES:
-    case EIO:
-      return std::string(" (") + std::strerror(errno) + ")";
-    default:
-      return {};
-  }
-}
-
-/// After a failed write whose errno says nothing (MPI-IO often keeps it): a nearly full file
-/// system of `file` is named.
-std::string spaceReason(const std::string& file) {
-  struct statvfs st {};
-  const std::filesystem::path dir = std::filesystem::path(file).parent_path();
-  if (::statvfs(dir.empty() ? "." : dir.c_str(), &st) != 0) return {};
-  const unsigned long long avail =
-      static_cast<unsigned long long>(st.f_bavail) * static_cast<unsigned long long>(st.f_frsize);
-  if (avail >= (1ull << 20)) return {};
-  return " (No space left on device: " + std::to_string(avail) +
-         " bytes free on the file system of '" + (dir.empty() ? std::string(".") : dir.string()) +
-         "')";
-}
-
 Hid plist(hid_t cls, const char* what) {
   return Hid(checkId(H5Pcreate(cls), what), H5Pclose);
 }

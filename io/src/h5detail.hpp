@@ -20,6 +20,7 @@
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
 #include "coloc/io/h5io.hpp"
+#include "io_reason.hpp"
 
 namespace coloc::h5 {
 
@@ -36,12 +37,6 @@ hid_t checkId(hid_t id, const char* what);
 void checkErr(herr_t e, const char* what);
 /// HDF5 prints its error stack to stderr by default; coloc reports errors itself.
 void silenceHdf5();
-/// What the failed system call said, for the errors a user can act on (errno of the last call;
-/// set to 0 before the HDF5 call by ioCollective).
-std::string ioReason();
-/// After a failed write whose errno says nothing (MPI-IO often keeps it): a nearly full file
-/// system of `file` is named.
-std::string spaceReason(const std::string& file);
 
 /// Run `f` on every rank; a local failure becomes coloc::Error on every rank ("context: ..."),
 /// coloc::IoError when `io` (a write: the driver exits with its I/O status).

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "coloc/core/error.hpp"
-#include "h5detail.hpp"
+#include "io_reason.hpp"
 
 namespace coloc {
 namespace {

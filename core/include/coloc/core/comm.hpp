@@ -25,6 +25,10 @@ class MpiSession {
   MpiSession& operator=(const MpiSession&) = delete;
 };
 
+/// True under SimGrid's SMPI (a simulated cluster, docs/smpi.md): every rank is a thread of one
+/// process and time is simulated (wall-clock deadlines mean nothing there). Needs MPI_Init.
+bool mpiIsSimulated();
+
 template <class T>
 MPI_Datatype mpiType();
 template <>

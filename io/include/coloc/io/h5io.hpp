@@ -32,6 +32,10 @@
 
 namespace coloc {
 
+/// False in a build without HDF5 (the SimGrid SMPI build, -DCOLOC_SMPI=ON): every file function
+/// below then throws coloc::Error saying so; callers refuse file keys before a run starts.
+bool hdf5Available();
+
 class H5File {
  public:
   /// Create (truncate) `path` for writing; the data go to `path`.tmp until close(). `sync`:

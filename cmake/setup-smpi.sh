@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# cmake/setup-smpi.sh [BUILD_DIR] [extra cmake args...] — the SimGrid SMPI build of coloc
+# (docs/smpi.md): installs SimGrid (Debian: libsimgrid-dev, simgrid) when missing, builds hypre
+# from Debian's own source package with smpicc once (BUILD_DIR/hypre, ~3 minutes on 2 cores),
+# then configures and builds coloc with -DCOLOC_SMPI=ON in BUILD_DIR (default: build-smpi).
+# Run it after cmake/setup.sh (which installs the other dependencies). Idempotent.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${1:-$root/build-smpi}
+shift || true
+mkdir -p "$build"
+build=$(cd "$build" && pwd)
+
+sudo=""
+[[ $(id -u) -ne 0 ]] && sudo="sudo"
+missing=()
+for p in libsimgrid-dev simgrid; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "coloc setup-smpi: installing ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}" >/dev/null
+fi
+
+# hypre with smpicc: the version of Debian's libhypre-dev (the Open MPI build's), from Debian's
+# source package, through a private deb-src list (the system's lists are not touched).
+hypre=$build/hypre
+lib=$hypre/install/lib/libHYPRE.a
+if [[ ! -f $lib ]]; then
+  version=$(dpkg-query -W -f='${Version}' libhypre-dev 2>/dev/null || true)
+  echo "coloc setup-smpi: building hypre ${version:-?} with smpicc in $hypre"
+  rm -rf "$hypre" && mkdir -p "$hypre/apt/lists/partial" "$hypre/src"
+  suite=$(. /etc/os-release && echo "${VERSION_CODENAME:-bookworm}")
+  mirror=$(grep -rhoE '^(URIs:|deb) *https?://[^ ]+' /etc/apt/sources.list.d/ /etc/apt/sources.list \
+             2>/dev/null | grep -v security | head -1 | sed -E 's/^(URIs:|deb) *//')
+  cat > "$hypre/apt/src.sources" <<X
+Types: deb-src
+URIs: ${mirror:-http://deb.debian.org/debian}
+Suites: $suite
+Components: main
+Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
+X
+  opts=(-o "Dir::Etc::sourcelist=$hypre/apt/src.sources" -o Dir::Etc::sourceparts=-
+        -o "Dir::State::Lists=$hypre/apt/lists" -o Debug::NoDropPrivs=1)
+  (cd "$hypre/src" && apt-get "${opts[@]}" update -qq &&
+     apt-get "${opts[@]}" source --download-only hypre >/dev/null 2>&1)
+  tar xzf "$hypre"/src/hypre_*.orig.tar.gz -C "$hypre/src"
+  cd "$hypre"/src/hypre-*/src
+  # SMPI_PRETEND_CC: autoconf's test programs must run as ordinary programs while configuring.
+  # -O2 as Debian builds its libhypre (the Open MPI build's), so simulated bursts cost the same.
+  SMPI_PRETEND_CC=1 ./configure CC=smpicc CXX=smpicxx CFLAGS=-O2 CXXFLAGS=-O2 \
+    --prefix="$hypre/install" --disable-fortran --enable-shared=no >"$hypre/configure.log" 2>&1 ||
+    { tail -20 "$hypre/configure.log"; exit 1; }
+  make -j "$(nproc)" >"$hypre/make.log" 2>&1 || { tail -20 "$hypre/make.log"; exit 1; }
+  make install >>"$hypre/make.log" 2>&1
+  cd "$root"
+fi
+
+if [[ ! -f $build/build.ninja || $# -gt 0 ]]; then
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOLOC_SMPI=ON \
+        -DCOLOC_BUILD_BENCHMARKS=OFF -DHYPRE_LIBRARY="$lib" \
+        -DHYPRE_INCLUDE_DIR="$hypre/install/include" -DPython3_EXECUTABLE=/usr/bin/python3 \
+        "$@" >/dev/null
+fi
+cmake --build "$build" -j "$(nproc)"
