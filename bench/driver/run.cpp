@@ -421,11 +421,13 @@ int runCase(const Comm& world, const RunOptions& opts) {
   };
 
   // 1. The output folders (rank 0): made; locked against a second run for as long as this one
-  // lasts; the checkpoint kept inside them and off the --restart file; what a previous run left
-  // there that would mislead removed. A --restart that is no regular file (a FIFO would block the
+  // lasts; the checkpoint kept inside them and off the --restart file; an earlier run's files
+  // refused (or removed with --overwrite); what a previous run left there that would mislead
+  // removed. A --restart that is no regular file (a FIFO would block the
   // read) is refused before anything is made.
   const RunFolders folders{outDir, outputOptions.dir, cfg.string("output.checkpoint_file")};
   FolderLocks locks;
+  std::vector<std::string> earlierFiles;  // rank 0: an earlier run's files, for --overwrite
   auto v = phase(channel, kInputErrorStatus, [&] {
     onRoot(world, [&] {
       if (opts.restart.empty()) return;
@@ -449,11 +451,18 @@ int runCase(const Comm& world, const RunOptions& opts) {
         if (!std::filesystem::equivalent(outDir, folders.dataDir, ec))
           locks.lock(folders.dataDir, "output.dir", opts.casePath);
         checkRunFiles(folders, opts.restart);
+        // Two runs never mix in one folder: an earlier run's files refuse the run, unless it
+        // continues that run (--restart of a checkpoint there) or replaces it (--overwrite).
+        if (!restartInFolders(folders, opts.restart)) {
+          earlierFiles = previousRunFiles(folders);
+          if (!opts.overwrite) refuseMixedRuns(folders, earlierFiles);
+        }
       });
     });
   if (!v.failed())
     v = phase(channel, kIoErrorStatus, [&] {
       if (!root) return;
+      removeRunFiles(earlierFiles);
       removeStaleFiles(folders);
       fault::point("outdir", 0);
     });

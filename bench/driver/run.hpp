@@ -16,7 +16,8 @@ struct RunOptions {
   std::vector<std::string> overrides;
   std::string outDir;
   bool quiet = false;
-  std::string restart;  // --restart FILE: continue from this checkpoint
+  std::string restart;     // --restart FILE: continue from this checkpoint
+  bool overwrite = false;  // --overwrite: remove an earlier run's files in the folders first
 };
 
 // Exit status of `coloc run`, the same on every rank (docs/robustness.md):

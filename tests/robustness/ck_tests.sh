@@ -169,27 +169,32 @@ EOF
       { cat "$work/a.log"; fail "run failed"; }
     echo "not an HDF5 file" > "$work/corrupt.h5"
     head -c 3000 "$work/a/checkpoint.h5" > "$work/truncated.h5"
+    # each refusal in a folder of its own (a refused run leaves its report.json)
+    i=0
     for t in "no such file|$work/missing.h5" "cannot open|$work/corrupt.h5" \
              "checkpoint '$work/truncated.h5'|$work/truncated.h5"; do
+      i=$((i + 1))
       "$expect" "${t%%|*}" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out \
-        "$work/x" --quiet --restart "${t#*|}" || fail "--restart ${t#*|}"
+        "$work/x$i" --quiet --restart "${t#*|}" || fail "--restart ${t#*|}"
     done
     "$expect" "its grid has 4x4x16 cells, the case 4x4x20" -- "$mpiexec" -n 2 --bind-to none \
-      "$coloc" run "$case" --out "$work/x" --quiet --set "domain.cells=[4,4,20]" \
+      "$coloc" run "$case" --out "$work/grid" --quiet --set "domain.cells=[4,4,20]" \
       --restart "$work/a/checkpoint.h5" || fail "restart on another grid"
     "$expect" "it was written in run.mode coupled" -- "$mpiexec" -n 2 --bind-to none \
-      "$coloc" run "$case" --out "$work/x" --quiet --set run.mode=fluid \
+      "$coloc" run "$case" --out "$work/mode" --quiet --set run.mode=fluid \
       --restart "$work/a/checkpoint.h5" || fail "restart in another mode"
     ;;
   damaged)
     run 2 "$work/a" --set run.steps=4 --set output.checkpoint_interval=4 ||
       { cat "$work/a.log"; fail "run failed"; }
     good=$work/a/checkpoint.h5
-    damage() {  # damage EXPECTED MODE DATASET ARG
+    n=0
+    damage() {  # damage EXPECTED MODE DATASET ARG (each refusal in a folder of its own)
       local bad=$work/bad.h5
+      n=$((n + 1))
       "$py" "$here/damage_checkpoint.py" "$good" "$bad" "$2" "$3" "$4" || fail "damaging $3"
-      "$expect" "$1" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out "$work/x" \
-        --quiet --restart "$bad" > "$work/damaged.log" 2>&1
+      "$expect" "$1" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" \
+        --out "$work/x$n" --quiet --restart "$bad" > "$work/damaged.log" 2>&1
       local rc=$?
       cat "$work/damaged.log"
       [[ $rc -eq 0 ]] || fail "damaged $3 ($2) not refused as expected"
