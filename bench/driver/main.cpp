@@ -22,6 +22,7 @@
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
+#include "coloc/core/provenance.hpp"
 #include "plan.hpp"
 #include "run.hpp"
 
@@ -42,8 +43,9 @@ int main(int argc, char** argv) {
       "coloc: co-located partitions CFD-DEM mini-app (fluid cells and the particles in\n"
       "the same region live on the same MPI rank). Run with mpirun -n N coloc run CASE."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", coloc::kVersionString);
+  app.set_version_flag("--version", std::string("coloc ") + coloc::kVersion);
   coloc::RunOptions opts;
+  opts.commandLine = coloc::commandLineText(argc, argv);
   auto* run = app.add_subcommand("run", "run a case file and write DIR/report.json");
   run->add_option("case", opts.casePath, "case file (JSON, // comments allowed)")->required();
   run->add_option("--set", opts.overrides,

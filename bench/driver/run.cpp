@@ -21,11 +21,14 @@
 #include "coloc/core/failure.hpp"
 #include "coloc/core/fault.hpp"
 #include "coloc/core/files.hpp"
+#include "coloc/core/provenance.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/checkpoint.hpp"
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
+#include "coloc/fv/library_version.hpp"
+#include "coloc/io/library_version.hpp"
 #include "diagnostics.hpp"
 #include "restart_account.hpp"
 #include "run_folder.hpp"
@@ -287,6 +290,7 @@ struct LastWords {
   const Comm* world = nullptr;
   std::string casePath, outDir;
   const Json* config = nullptr;
+  const Json* provenance = nullptr;
 };
 LastWords lastWords;
 
@@ -364,6 +368,7 @@ void libraryAborted() {
       report.set("exit_code", kRunFailedStatus);
       report.set("error", msg);
       report.set("out_of_memory", true);
+      if (lastWords.provenance) report.set("provenance", *lastWords.provenance);
       const std::filesystem::path dir(lastWords.outDir);
       const std::string tmp = (dir / ("report.rank" + std::to_string(rank) + ".json.tmp")).string();
       {
@@ -405,6 +410,10 @@ int runCase(const Comm& world, const RunOptions& opts) {
   if (world.isRoot())
     for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
   setFailureWait(cfg.number("run.failure_wait_s"));
+  // Where the run comes from (collective): report.json's "provenance".
+  Json prov = provenance(world, opts.commandLine);
+  prov["hypre_version"] = fv::hypreVersion();
+  prov["hdf5_version"] = hdf5Version();
   const std::string outDir = opts.outDir.empty()
                                  ? (std::filesystem::path("out") / cfg.string("name")).string()
                                  : opts.outDir;
@@ -412,7 +421,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const OutputOptions outputOptions = outputOptionsFromConfig(cfg, outDir);
   const bool root = world.isRoot();
   // For libraryAborted(), while this run is in progress.
-  lastWords = {&world, opts.casePath, outDir, &cfg.json()};
+  lastWords = {&world, opts.casePath, outDir, &cfg.json(), &prov};
   struct ClearLastWords {
     ~ClearLastWords() { lastWords = {}; }
   } clearLastWords;
@@ -488,6 +497,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
       if (simulation) report.merge(simulation->report(tLoop > 0 ? MPI_Wtime() - tLoop : 0.0));
       report.set("status", status);
       report.set("exit_code", code);
+      report.set("provenance", prov);
       if (!error.empty()) report.set("error", error);
       if (outOfMemory(error)) report.set("out_of_memory", true);
       if (!restartReport.is_null()) report.set("restart", restartReport);

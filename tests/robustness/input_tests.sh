@@ -16,6 +16,10 @@
 #   restart_changes   a restart with another density and source count: the notes and
 #                     report.json restart.{kept_from_checkpoint,taken_from_case}
 #   restart_nothing   a restart whose run.steps is at the checkpoint's step: exit 2, report failed
+#   provenance        report.json's provenance: every key, each plausible (the date now, this
+#                     host, cores online, the rank count, oversubscribed exactly when a node has
+#                     more ranks than cores, the source tree's git commit, the version of the top
+#                     CMakeLists.txt, the MPI / hypre / HDF5 versions, the command line)
 #   pressure_max_iter fluid.pressure.max_iter = 1: a warning and fluid.unconverged_solves; with
 #                     fluid.pressure.on_no_convergence = error: exit 3 naming the key
 set -u
@@ -154,6 +158,58 @@ case $test in
     expect 0 "report written"
     grep -q "warning" "$log" && fail "a warning where every solve converged"
     json "$work/c/report.json" "d['fluid']['unconverged_solves'] == 0"
+    ;;
+  provenance)
+    src=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+    cores=$(getconf _NPROCESSORS_ONLN)
+    runs=(2)
+    ((cores <= 4)) && runs+=($((cores + 1)))  # one more rank than cores: oversubscribed
+    for np in "${runs[@]}"; do
+      run "np$np" "$mpiexec" -n "$np" --bind-to none "$coloc" run "$bed" --out "$work/np$np" \
+        --quiet --set run.steps=1 --set 'description=a b'
+      expect 0 "report written"
+      "$py" - "$work/np$np/report.json" "$np" "$cores" "$src" "$bed" <<'PYEOF' || fail "provenance ($np ranks)"
+import datetime, json, re, socket, subprocess, sys
+d = json.load(open(sys.argv[1]))
+np, cores, src, bed = int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5]
+p = d["provenance"]
+print(json.dumps(p, indent=1))
+keys = ["date", "host", "cpu_model", "cores", "ranks", "nodes", "ranks_per_node_max",
+        "oversubscribed", "cores_used", "coloc_version", "git_commit", "git_dirty", "compiler",
+        "compiler_flags", "build_type", "mpi_library", "hypre_version", "hdf5_version",
+        "command_line"]
+missing = [k for k in keys if k not in p]
+assert not missing, missing
+when = datetime.datetime.strptime(p["date"], "%Y-%m-%dT%H:%M:%SZ")
+age = datetime.datetime.utcnow() - when
+assert datetime.timedelta(0) <= age < datetime.timedelta(minutes=10), age
+assert p["host"] == socket.gethostname(), p["host"]
+assert p["cpu_model"] and p["cpu_model"] != "unknown", p["cpu_model"]
+assert p["cores"] == cores and p["ranks"] == np and p["nodes"] == 1, p
+assert p["ranks_per_node_max"] == np, p
+assert p["oversubscribed"] is (np > cores), (np, cores, p["oversubscribed"])
+assert p["cores_used"] == min(np, cores), (np, cores, p["cores_used"])
+version = re.search(r"project\(coloc VERSION ([0-9.]+)", open(src + "/CMakeLists.txt").read())
+assert p["coloc_version"] == version.group(1) == d["coloc_version"], p["coloc_version"]
+git = subprocess.run(["git", "-C", src, "rev-parse", "HEAD"], capture_output=True, text=True)
+if git.returncode == 0:
+    assert re.fullmatch(r"[0-9a-f]{40}", p["git_commit"]), p["git_commit"]
+    assert isinstance(p["git_dirty"], bool), p["git_dirty"]
+else:
+    assert p["git_commit"] == "unknown", p["git_commit"]
+assert re.match(r"(GNU|Clang|AppleClang|IntelLLVM|Intel) [0-9]+\.", p["compiler"]), p["compiler"]
+assert isinstance(p["build_type"], str), p["build_type"]
+if p["build_type"] in ("Release", "RelWithDebInfo"):
+    assert "-O" in p["compiler_flags"], p["compiler_flags"]
+assert p["compiler_flags"] == p["compiler_flags"].strip(), p["compiler_flags"]
+assert re.search(r"(Open MPI|MPICH|Intel\(R\) MPI|MVAPICH)", p["mpi_library"]), p["mpi_library"]
+assert "\n" not in p["mpi_library"], p["mpi_library"]
+assert re.fullmatch(r"[0-9]+\.[0-9]+\.[0-9]+.*", p["hypre_version"]), p["hypre_version"]
+assert re.fullmatch(r"[0-9]+\.[0-9]+\.[0-9]+", p["hdf5_version"]), p["hdf5_version"]
+cl = p["command_line"]
+assert " run " in cl and bed in cl and "run.steps=1" in cl and "'description=a b'" in cl, cl
+PYEOF
+    done
     ;;
   *) fail "unknown test $test" ;;
 esac
