@@ -736,10 +736,17 @@ int runCase(const Comm& world, const RunOptions& opts) {
   if (root) {
     const Json& j = written;
     {
+      // The steps of this run: after a restart, those from the checkpoint's step on.
+      const auto start = simulation->runStart();
+      const long long last = j["run"]["steps"].get<long long>();
+      char resumed[96] = "";
+      if (start[0] > 0)
+        std::snprintf(resumed, sizeof resumed, ", steps %lld-%lld after the restart", start[0] + 1,
+                      last);
       std::printf(
-          "coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
+          "coloc: %lld steps (%lld DEM sub-steps)%s, t = %.6g s, %.3f s wall, "
           "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
-          j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
+          last - start[0], j["run"]["dem_substeps"].get<long long>() - start[1], resumed,
           j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
           j["throughput"]["cell_steps_per_s"].get<double>(),
           j["throughput"]["particle_steps_per_s"].get<double>(),

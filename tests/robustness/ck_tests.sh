@@ -86,6 +86,10 @@ case $test in
     $cmp "$work/a/ck_000010.h5" "$work/b/ck_000010.h5" || fail "final checkpoints differ"
     same_series_tail "$work/a/series.csv" "$work/b/series.csv"
     [[ $(wc -l < "$work/b/series.csv") -eq 6 ]] || fail "restart series should hold steps 6-10"
+    # the closing line counts the steps this run made (5), not the total (10)
+    grep -q "^coloc: 10 steps (" "$work/a.log" || { cat "$work/a.log"; fail "run a's step count"; }
+    grep -q "^coloc: 5 steps ([0-9]* DEM sub-steps), steps 6-10 after the restart" "$work/b.log" ||
+      { cat "$work/b.log"; fail "the restart's closing line does not count its own 5 steps"; }
     same_report "$work/a/report.json" "$work/b/report.json"
     ;;
   interval)
@@ -239,6 +243,20 @@ EOF2
     done
     "$expect" "an inlet but no outlet" -- "$coloc" check "$case" --ranks 2 \
       --set 'fluid.boundary.zhi={"type":"wall"}' || fail "check of a bad case"
+    # a CFL the run stops at in its first step: check refuses the case (and the run does stop);
+    # one the inlet alone keeps below fluid.cfl_max stays valid (and runs)
+    fast="fluid.boundary.zlo.velocity=[0,0,5]"
+    "$expect" "fluid.dt: the CFL of the first step would be at least 2 " -- "$coloc" check "$case" \
+      --ranks 2 --set "$fast" || fail "check of a case whose CFL stops the run"
+    "$expect" "the run failed in step 1 " -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" \
+      --out "$work/cfl" --quiet --set run.steps=2 --set "$fast" || fail "the fast inlet did not stop the run"
+    grep -q "exceeds fluid.cfl_max" "$work/cfl/report.json" || fail "the run did not stop for its CFL"
+    slow="fluid.boundary.zlo.velocity=[0,0,1]"
+    timeout 60 "$coloc" check "$case" --ranks 2 --set "$slow" > "$work/check_slow.txt" 2>&1 ||
+      { cat "$work/check_slow.txt"; fail "check refused an inlet below fluid.cfl_max"; }
+    grep -q "CFL 1.33, at least 0.4 (fluid.cfl_max = 1)" "$work/check_slow.txt" ||
+      { cat "$work/check_slow.txt"; fail "no CFL range"; }
+    run 2 "$work/slow" --set run.steps=2 --set "$slow" || { cat "$work/slow.log"; fail "the slow inlet's run failed"; }
     "$expect" "a run on 2 rank(s) here would be refused" -- "$coloc" check "$case" --ranks 2 \
       --set 'domain.cells=[4000,4000,4000]' || fail "check of a case too large"
     "$expect" "no case-file key starts with this" -- "$coloc" keys particles.nope || fail "keys"
