@@ -23,8 +23,9 @@ fi
 # The main job: benchmark 1 (one particle crossing a process boundary), serial and parallel,
 # and the paper's figure with both runs on the same axes.
 case=$root/bench/cases/case1.json
-run 1 "$case" --out "$root/out/case1-np1"
-run 2 "$case" --out "$root/out/case1-np2"
+# (--overwrite: a second bench/run.sh replaces the runs of the first)
+run 1 "$case" --out "$root/out/case1-np1" --overwrite
+run 2 "$case" --out "$root/out/case1-np2" --overwrite
 /usr/bin/python3 "$root/bench/scripts/plot_case1.py" "$root/out/case1-np1/series.csv" \
   "$root/out/case1-np2/series.csv" --labels SEQ PAR --out "$root/out/case1.png"
 echo "bench/run.sh: reports in out/case1-np1/report.json and out/case1-np2/report.json," \

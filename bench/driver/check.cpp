@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "coloc/core/config.hpp"
+#include "coloc/core/error.hpp"
 #include "coloc/core/run_config.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/simulation.hpp"
@@ -285,11 +286,26 @@ int checkCase(const CheckOptions& opts) {
                   tHertz / demDt);
     std::printf("\n");
   }
+  std::string cflKey, cflError;  // a CFL the run would stop at (below)
   if (mode != RunMode::ParticlesOnly) {
     double h = std::min({g.spacing(0), g.spacing(1), g.spacing(2)});
-    double u = 0;
+    // The run's CFL of a cell is dt sum_d |u_d| / h_d (fv/src/step.cpp): the same measure of the
+    // initial velocity and of each inlet's. `sure`: what the first step's CFL is at least (an
+    // inlet face carries its velocity, a superficial one divided by eps <= 1 there, so at least
+    // the velocity given); `possible`: the largest it may be (the initial velocity, a superficial
+    // inlet divided by coupling.eps_min).
+    double u = 0, sure = 0, possible = 0;
+    const auto convective = [&](const double v[3], double scale) {
+      double r = 0;
+      for (int a = 0; a < 3; ++a) r += std::fabs(v[a]) * scale / g.spacing(a);
+      return r;
+    };
     const auto iv = cfg.vec3("fluid.initial_velocity");
     for (int a = 0; a < 3; ++a) u = std::max(u, std::fabs(iv[a]));
+    {
+      const double v[3] = {iv[0], iv[1], iv[2]};
+      possible = convective(v, 1.0);
+    }
     // The fastest inlet, a whole face or a patch of one (fluid.patches).
     std::vector<Json> inlets;
     for (const char* f : {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"})
@@ -298,30 +314,53 @@ int checkCase(const CheckOptions& opts) {
       for (const auto& patch : cfg.at("fluid.patches")) inlets.push_back(patch);
     for (const Json& b : inlets) {
       if (b.at("type").get<std::string>() != "inlet" || !b.contains("velocity")) continue;
-      double s = 0;
-      for (int a = 0; a < 3; ++a) s = std::max(s, std::fabs(b.at("velocity")[a].get<double>()));
+      double s = 0, v[3];
+      for (int a = 0; a < 3; ++a) v[a] = b.at("velocity")[a].get<double>();
+      for (int a = 0; a < 3; ++a) s = std::max(s, std::fabs(v[a]));
+      double scale = 1.0;
       if (b.contains("superficial") && b.at("superficial").get<bool>() &&
           mode != RunMode::FluidOnly)
-        s /= cfg.number("coupling.eps_min");
-      u = std::max(u, s);
+        scale = 1.0 / cfg.number("coupling.eps_min");
+      u = std::max(u, s * scale);
+      sure = std::max(sure, convective(v, 1.0));
+      possible = std::max(possible, convective(v, scale));
     }
     double dt = cfg.number("fluid.dt");
     const long long sub = cfg.integer("coupling.dem_substeps");
     if ((mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0)
       dt = static_cast<double>(sub) * demDt;
-    const double nu = cfg.number("fluid.nu");
+    const double nu = cfg.number("fluid.nu"), cflMax = cfg.number("fluid.cfl_max");
+    char least[64] = "";
+    if (sure < possible) std::snprintf(least, sizeof least, ", at least %.3g", sure * dt);
     std::printf(
         "coloc check: CFD: step %g s%s, smallest cell %g m, reference speed %g m/s: CFL "
-        "%.3g (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
-        dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, u * dt / h,
-        cfg.number("fluid.cfl_max"), nu * dt / (h * h));
+        "%.3g%s (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
+        dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, possible * dt,
+        least, cflMax, nu * dt / (h * h));
     if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
       std::printf(", %.0f DEM sub-steps a CFD step", dt / demDt);
     std::printf("\n");
-    if (u * dt / h > cfg.number("fluid.cfl_max"))
+    // The run stops at the first step whose CFL exceeds fluid.cfl_max (the first step is
+    // fluid.dt even with fluid.adaptive_dt): a case whose inlet alone exceeds it is not valid;
+    // one that may exceed it (inside a bed, from the initial velocity) is warned of.
+    const bool bySubsteps = (mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0;
+    const char* lower = bySubsteps ? "coupling.dem_substeps or particles.dt" : "fluid.dt";
+    if (sure * dt > cflMax) {
+      char msg[400];
+      std::snprintf(msg, sizeof msg,
+                    "the CFL of the first step would be at least %.3g (step %g s, an inlet's "
+                    "velocity), above fluid.cfl_max = %g: the run would stop in its first step; "
+                    "lower %s%s",
+                    sure * dt, dt, cflMax, lower,
+                    bySubsteps ? "" : " (fluid.adaptive_dt then keeps the later steps below it)");
+      cflKey = bySubsteps ? "coupling.dem_substeps" : "fluid.dt";
+      cflError = msg;
+    } else if (possible * dt > cflMax) {
       std::printf(
-          "coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run would "
-          "stop at its first steps (lower fluid.dt or use fluid.adaptive_dt)\n");
+          "coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run may stop at its "
+          "first steps (lower %s, or use fluid.adaptive_dt)\n",
+          lower);
+    }
   }
   for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
 
@@ -332,6 +371,7 @@ int checkCase(const CheckOptions& opts) {
     std::fprintf(stderr, "coloc: error: %s\n", chosen->error.c_str());
     return 2;
   }
+  if (!cflKey.empty()) throw ConfigError(cflKey, cflError);  // after the whole picture
   std::printf("coloc check: the case is valid for %d rank(s); nothing was run\n", N);
   return 0;
 }

@@ -1,6 +1,7 @@
 // coloc — the command-line driver.
 //
 //   coloc run CASE.json [--set key.path=value ...] [--out DIR] [--restart CHECKPOINT.h5]
+//             [--overwrite]
 //   coloc keys [PREFIX]   each case-file key (or those under PREFIX): type, default, range, meaning
 //   coloc check CASE.json [--ranks N] [--set ...]   validate, show layouts/memory/time steps
 //   coloc plan CASE.json --ranks 28,56,1024 [--strategy S ...] [--set ...] [--out DIR]
@@ -21,6 +22,7 @@
 #include "coloc/core/comm.hpp"
 #include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
+#include "coloc/core/provenance.hpp"
 #include "plan.hpp"
 #include "run.hpp"
 
@@ -41,8 +43,9 @@ int main(int argc, char** argv) {
       "coloc: co-located partitions CFD-DEM mini-app (fluid cells and the particles in\n"
       "the same region live on the same MPI rank). Run with mpirun -n N coloc run CASE."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", coloc::kVersionString);
+  app.set_version_flag("--version", std::string("coloc ") + coloc::kVersion);
   coloc::RunOptions opts;
+  opts.commandLine = coloc::commandLineText(argc, argv);
   auto* run = app.add_subcommand("run", "run a case file and write DIR/report.json");
   run->add_option("case", opts.casePath, "case file (JSON, // comments allowed)")->required();
   run->add_option("--set", opts.overrides,
@@ -51,6 +54,10 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);
   run->add_option("--out", opts.outDir, "output directory (default: out/<case name>)");
   run->add_flag("--quiet", opts.quiet, "no progress lines");
+  run->add_flag("--overwrite", opts.overwrite,
+                "the output folders may hold an earlier run's files (report.json, fields.xmf, "
+                "checkpoints, ...): remove them before the run (without it such a folder is "
+                "refused, unless --restart continues from a checkpoint in it)");
   run->add_option("--restart", opts.restart,
                   "continue from this checkpoint (output.checkpoint_*) instead of the case's "
                   "initial condition, on any rank count; run.steps/run.end_time count from the "

@@ -54,7 +54,8 @@ bool keptFromCheckpoint(const std::string& key) {
 
 }  // namespace
 
-Json accountRestart(const Comm& world, const std::string& checkpoint, const Config& cfg) {
+Json accountRestart(const Comm& world, const std::string& checkpoint, const Config& cfg,
+                    RunLog& log) {
   const coupling::CheckpointInfo info = coupling::readCheckpointInfo(world, checkpoint);
   Json stored;
   try {
@@ -81,14 +82,13 @@ Json accountRestart(const Comm& world, const std::string& checkpoint, const Conf
                        {"taken_from_case", taken}};
   if (world.isRoot() && !diff.empty()) {
     if (!keptText.empty())
-      std::printf(
+      log.out(
           "coloc: note: restart: kept from the checkpoint (in its particles and fields), "
           "not the case's values: %s\n",
           keptText.c_str());
     if (!takenText.empty())
-      std::printf("coloc: note: restart: taken from the case (checkpoint -> case): %s\n",
-                  takenText.c_str());
-    std::fflush(stdout);
+      log.out("coloc: note: restart: taken from the case (checkpoint -> case): %s\n",
+              takenText.c_str());
   }
   return report;
 }

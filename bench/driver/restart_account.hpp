@@ -6,6 +6,7 @@
 
 #include "coloc/core/comm.hpp"
 #include "coloc/core/config.hpp"
+#include "run_log.hpp"
 
 namespace coloc {
 
@@ -13,8 +14,10 @@ namespace coloc {
 /// the restart keeps from the checkpoint (what is baked into its state: the particle sources and
 /// seed, the materials' densities, the fluid's initial velocity) and those it takes from the
 /// case: report.json's `restart` object ({checkpoint, step, time, kept_from_checkpoint,
-/// taken_from_case}); rank 0 prints them as notes. Collective (reads the file's attributes).
-Json accountRestart(const Comm& world, const std::string& checkpoint, const Config& cfg);
+/// taken_from_case}); rank 0 prints them as notes (through `log`). Collective (reads the file's
+/// attributes).
+Json accountRestart(const Comm& world, const std::string& checkpoint, const Config& cfg,
+                    RunLog& log);
 
 /// ConfigError naming run.steps (or run.end_time) when a run restarted at `steps`, `time` has
 /// nothing left to run.

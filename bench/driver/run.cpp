@@ -21,14 +21,19 @@
 #include "coloc/core/failure.hpp"
 #include "coloc/core/fault.hpp"
 #include "coloc/core/files.hpp"
+#include "coloc/core/provenance.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/checkpoint.hpp"
 #include "coloc/coupling/rebalance.hpp"
 #include "coloc/coupling/simulation.hpp"
+#include "coloc/fv/library_version.hpp"
+#include "coloc/io/library_version.hpp"
 #include "diagnostics.hpp"
 #include "restart_account.hpp"
 #include "run_folder.hpp"
+#include "run_log.hpp"
+#include "summary.hpp"
 
 namespace coloc {
 namespace {
@@ -37,8 +42,12 @@ namespace {
 /// estimated time left and the pressure iterations (last, average over the run).
 class Progress {
  public:
-  Progress(const Comm& comm, double interval, const coupling::Simulation& sim)
-      : root_(comm.isRoot()), interval_(interval), steps0_(sim.steps()), time0_(sim.time()) {
+  Progress(const Comm& comm, double interval, const coupling::Simulation& sim, RunLog& log)
+      : log_(log),
+        root_(comm.isRoot()),
+        interval_(interval),
+        steps0_(sim.steps()),
+        time0_(sim.time()) {
     t0_ = last_ = MPI_Wtime();
   }
   void update(coupling::Simulation& sim, long long maxSteps, double endTime) {
@@ -64,12 +73,12 @@ class Progress {
         std::snprintf(pressure, sizeof pressure, "  p-iter %lld (avg %.1f)", c.itLast,
                       static_cast<double>(c.itSum) / static_cast<double>(c.solves));
     }
-    std::printf("coloc: step %lld%s  t = %.6g s  dt = %.3g s  %.2f steps/s  %.0f s left%s\n",
-                sim.steps(), total, sim.time(), sim.lastDt(), rate, std::max(left, 0.0), pressure);
-    std::fflush(stdout);
+    log_.out("coloc: step %lld%s  t = %.6g s  dt = %.3g s  %.2f steps/s  %.0f s left%s\n",
+             sim.steps(), total, sim.time(), sim.lastDt(), rate, std::max(left, 0.0), pressure);
   }
 
  private:
+  RunLog& log_;
   bool root_;
   double interval_, t0_, last_;
   long long steps0_;
@@ -225,7 +234,7 @@ class Series {
 
 /// output.snapshot: rank 0 runs bench/scripts/snapshot.py on the run's output (a picture of the
 /// last fields and particles, OUT/snapshot.png). Only a warning when it cannot.
-void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet) {
+void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet, RunLog& log) {
   const OutputOptions o = outputOptionsFromConfig(cfg, outDir);
   if (!cfg.boolean("output.snapshot") || !o.fields || o.intervalSteps <= 0) return;
   namespace fs = std::filesystem;
@@ -239,15 +248,24 @@ void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet) {
   const std::string png = (fs::path(outDir) / "snapshot.png").string();
   const std::string cmd = std::string(python) + " " + quote(script.string()) + " " + quote(o.dir) +
                           " --png " + quote(png) + " --report " +
-                          quote((fs::path(outDir) / "report.json").string()) +
-                          (quiet ? " >/dev/null" : "");
+                          quote((fs::path(outDir) / "report.json").string()) + " 2>&1";
   std::fflush(stdout);
-  const int rc = std::system(cmd.c_str());
+  // What the script says goes to the terminal (unless --quiet) and the log.
+  int rc = -1;
+  if (std::FILE* pipe = ::popen(cmd.c_str(), "r")) {
+    char line[1024];
+    while (std::fgets(line, sizeof line, pipe))
+      if (quiet)
+        log.file("%s", line);
+      else
+        log.out("%s", line);
+    rc = ::pclose(pipe);
+  }
   if (rc != 0)
-    std::fprintf(stderr,
-                 "coloc: warning: no snapshot.png (%s exited with status %d); the run's output "
-                 "is complete (set output.snapshot=false to skip the picture)\n",
-                 script.string().c_str(), rc);
+    log.err(
+        "coloc: warning: no snapshot.png (%s exited with status %d); the run's output "
+        "is complete (set output.snapshot=false to skip the picture)\n",
+        script.string().c_str(), rc);
 }
 
 /// The stop signal received so far (0: none); set by the handler installStopSignals() puts in.
@@ -287,6 +305,7 @@ struct LastWords {
   const Comm* world = nullptr;
   std::string casePath, outDir;
   const Json* config = nullptr;
+  const Json* provenance = nullptr;
 };
 LastWords lastWords;
 
@@ -364,6 +383,7 @@ void libraryAborted() {
       report.set("exit_code", kRunFailedStatus);
       report.set("error", msg);
       report.set("out_of_memory", true);
+      if (lastWords.provenance) report.set("provenance", *lastWords.provenance);
       const std::filesystem::path dir(lastWords.outDir);
       const std::string tmp = (dir / ("report.rank" + std::to_string(rank) + ".json.tmp")).string();
       {
@@ -402,9 +422,14 @@ int runCase(const Comm& world, const RunOptions& opts) {
   // Whole-case checks and the memory estimate, before anything large is allocated.
   const std::vector<std::string> notes = coupling::checkCase(cfg);
   coupling::checkMemory(world, cfg);
-  if (world.isRoot())
-    for (const auto& n : notes) std::printf("coloc: note: %s\n", n.c_str());
+  // Rank 0's messages, also into OUT/log.txt once the folder is ready (the lines before kept).
+  RunLog log(world.isRoot());
+  for (const auto& n : notes) log.out("coloc: note: %s\n", n.c_str());
   setFailureWait(cfg.number("run.failure_wait_s"));
+  // Where the run comes from (collective): report.json's "provenance".
+  Json prov = provenance(world, opts.commandLine);
+  prov["hypre_version"] = fv::hypreVersion();
+  prov["hdf5_version"] = hdf5Version();
   const std::string outDir = opts.outDir.empty()
                                  ? (std::filesystem::path("out") / cfg.string("name")).string()
                                  : opts.outDir;
@@ -412,20 +437,22 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const OutputOptions outputOptions = outputOptionsFromConfig(cfg, outDir);
   const bool root = world.isRoot();
   // For libraryAborted(), while this run is in progress.
-  lastWords = {&world, opts.casePath, outDir, &cfg.json()};
+  lastWords = {&world, opts.casePath, outDir, &cfg.json(), &prov};
   struct ClearLastWords {
     ~ClearLastWords() { lastWords = {}; }
   } clearLastWords;
   const auto say = [&](const FailureChannel::Verdict& v, const std::string& before) {
-    if (root) std::fprintf(stderr, "coloc: error: %s%s\n", before.c_str(), v.message.c_str());
+    log.err("coloc: error: %s%s\n", before.c_str(), v.message.c_str());
   };
 
   // 1. The output folders (rank 0): made; locked against a second run for as long as this one
-  // lasts; the checkpoint kept inside them and off the --restart file; what a previous run left
-  // there that would mislead removed. A --restart that is no regular file (a FIFO would block the
+  // lasts; the checkpoint kept inside them and off the --restart file; an earlier run's files
+  // refused (or removed with --overwrite); what a previous run left there that would mislead
+  // removed. A --restart that is no regular file (a FIFO would block the
   // read) is refused before anything is made.
   const RunFolders folders{outDir, outputOptions.dir, cfg.string("output.checkpoint_file")};
   FolderLocks locks;
+  std::vector<std::string> earlierFiles;  // rank 0: an earlier run's files, for --overwrite
   auto v = phase(channel, kInputErrorStatus, [&] {
     onRoot(world, [&] {
       if (opts.restart.empty()) return;
@@ -449,13 +476,22 @@ int runCase(const Comm& world, const RunOptions& opts) {
         if (!std::filesystem::equivalent(outDir, folders.dataDir, ec))
           locks.lock(folders.dataDir, "output.dir", opts.casePath);
         checkRunFiles(folders, opts.restart);
+        // Two runs never mix in one folder: an earlier run's files refuse the run, unless it
+        // continues that run (--restart of a checkpoint there) or replaces it (--overwrite).
+        if (!restartInFolders(folders, opts.restart)) {
+          earlierFiles = previousRunFiles(folders);
+          if (!opts.overwrite) refuseMixedRuns(folders, earlierFiles);
+        }
       });
     });
   if (!v.failed())
     v = phase(channel, kIoErrorStatus, [&] {
       if (!root) return;
+      removeRunFiles(earlierFiles);
       removeStaleFiles(folders);
       fault::point("outdir", 0);
+      log.open((std::filesystem::path(outDir) / "log.txt").string(),
+               restartInFolders(folders, opts.restart));
     });
   if (v.failed()) {
     say(v, "");
@@ -479,6 +515,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
       if (simulation) report.merge(simulation->report(tLoop > 0 ? MPI_Wtime() - tLoop : 0.0));
       report.set("status", status);
       report.set("exit_code", code);
+      report.set("provenance", prov);
+      if (simulation) report.set("figure_of_merit", figureOfMerit(report.json()));
       if (!error.empty()) report.set("error", error);
       if (outOfMemory(error)) report.set("out_of_memory", true);
       if (!restartReport.is_null()) report.set("restart", restartReport);
@@ -499,7 +537,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
       written = report.json();
     });
     if (r.failed() && root)
-      std::fprintf(stderr, "coloc: error: could not write the report: %s\n", r.message.c_str());
+      log.err("coloc: error: could not write the report: %s\n", r.message.c_str());
     return r.failed() ? std::string() : path;
   };
 
@@ -518,22 +556,22 @@ int runCase(const Comm& world, const RunOptions& opts) {
         simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
     if (root && !opts.quiet) {
       const auto& dec = simulation->decomposition();
-      std::printf(
+      log.out(
           "coloc: case '%s', mode %s, %d rank(s) as %s, %lld cells, %lld particles, "
           "set-up %.2f s\n",
           cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(),
           dec.shape().c_str(), static_cast<long long>(dec.grid().cellCount()), particleCount,
           setupWall);
       if (!opts.restart.empty())
-        std::printf("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
-                    simulation->steps(), simulation->time());
-      std::fflush(stdout);
+        log.out("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
+                simulation->steps(), simulation->time());
     }
     if (!opts.restart.empty()) {
-      restartReport = accountRestart(world, opts.restart, cfg);
+      restartReport = accountRestart(world, opts.restart, cfg, log);
       refuseEmptyRestart(cfg, opts.restart, simulation->steps(), simulation->time());
     }
-    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation);
+    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation,
+                     log);
     series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
                    cfg);
     output.emplace(simulation->decomposition(), outputOptions);
@@ -591,10 +629,9 @@ int runCase(const Comm& world, const RunOptions& opts) {
               output->rebind(simulation->decomposition());
               ++rebalances;
               if (root && !opts.quiet) {
-                std::printf(
-                    "coloc: step %lld: re-balanced onto %s, modelled imbalance %.3f -> %.3f\n",
-                    simulation->steps(), simulation->decomposition().shape().c_str(),
-                    plan.currentImbalance, plan.newImbalance);
+                log.out("coloc: step %lld: re-balanced onto %s, modelled imbalance %.3f -> %.3f\n",
+                        simulation->steps(), simulation->decomposition().shape().c_str(),
+                        plan.currentImbalance, plan.newImbalance);
               }
             }
           }
@@ -603,13 +640,13 @@ int runCase(const Comm& world, const RunOptions& opts) {
             // The same count on every rank (hypre's norms are global); printed once.
             const fv::FluidCounters c = simulation->fluid()->counters();
             if (c.unconverged > 0 && unconvergedWarned == 0)
-              std::fprintf(stderr,
-                           "coloc: warning: step %lld: the pressure solve did not converge "
-                           "(residual %.3g of the flux scale after %lld iterations, "
-                           "fluid.pressure.max_iter = %lld, tol = %g); counted in report.json "
-                           "fluid.unconverged_solves (fluid.pressure.on_no_convergence = error "
-                           "stops the run)\n",
-                           simulation->steps(), c.resLast, c.itLast, pressureMaxIter, pressureTol);
+              log.err(
+                  "coloc: warning: step %lld: the pressure solve did not converge "
+                  "(residual %.3g of the flux scale after %lld iterations, "
+                  "fluid.pressure.max_iter = %lld, tol = %g); counted in report.json "
+                  "fluid.unconverged_solves (fluid.pressure.on_no_convergence = error "
+                  "stops the run)\n",
+                  simulation->steps(), c.resLast, c.itLast, pressureMaxIter, pressureTol);
             unconvergedWarned = c.unconverged;
           }
           // Rank 0's series error, after every collective of the step: agreed cleanly.
@@ -648,17 +685,17 @@ int runCase(const Comm& world, const RunOptions& opts) {
           saved = path;
       }
       if (root) {
-        std::fprintf(stderr, "coloc: error: %s: %s\n", when, v.message.c_str());
+        log.err("coloc: error: %s: %s\n", when, v.message.c_str());
         if (!saved.empty())
-          std::fprintf(stderr,
-                       "coloc: the state at the failure is in %s (status 'failed'; not "
-                       "restartable)%s%s\n",
-                       saved.c_str(), lastCheckpoint.empty() ? "" : "; last good checkpoint: ",
-                       lastCheckpoint.c_str());
+          log.err(
+              "coloc: the state at the failure is in %s (status 'failed'; not "
+              "restartable)%s%s\n",
+              saved.c_str(),
+              lastCheckpoint.empty() ? "" : "; last good checkpoint: ", lastCheckpoint.c_str());
         else if (!lastCheckpoint.empty())
-          std::fprintf(stderr, "coloc: last good checkpoint: %s\n", lastCheckpoint.c_str());
+          log.err("coloc: last good checkpoint: %s\n", lastCheckpoint.c_str());
         if (!saveError.empty())
-          std::fprintf(stderr, "coloc: could not write the failed state: %s\n", saveError.c_str());
+          log.err("coloc: could not write the failed state: %s\n", saveError.c_str());
       }
       writeReport("failed", v.code, std::string(when) + ": " + v.message,
                   saved.empty() ? lastCheckpoint : saved, 0);
@@ -680,15 +717,14 @@ int runCase(const Comm& world, const RunOptions& opts) {
           writeReport("interrupted", kInterruptedBase + sig,
                       std::string("stopped by ") + signalName(sig), path, sig);
       if (root) {
-        std::fprintf(stderr,
-                     "coloc: stopped by %s after step %lld (t = %.9g s); checkpoint: %s; "
-                     "report: %s; exit status %d\n",
-                     signalName(sig), simulation->steps(), simulation->time(),
-                     path.empty() ? "none" : path.c_str(), report.empty() ? "none" : report.c_str(),
-                     kInterruptedBase + sig);
+        log.err(
+            "coloc: stopped by %s after step %lld (t = %.9g s); checkpoint: %s; "
+            "report: %s; exit status %d\n",
+            signalName(sig), simulation->steps(), simulation->time(),
+            path.empty() ? "none" : path.c_str(), report.empty() ? "none" : report.c_str(),
+            kInterruptedBase + sig);
         if (!saveError.empty())
-          std::fprintf(stderr, "coloc: error: could not write the final checkpoint: %s\n",
-                       saveError.c_str());
+          log.err("coloc: error: could not write the final checkpoint: %s\n", saveError.c_str());
       }
       return kInterruptedBase + sig;
     }
@@ -708,27 +744,43 @@ int runCase(const Comm& world, const RunOptions& opts) {
   }
   if (root) series->sync();
   if (root && unconvergedWarned > 0)
-    std::fprintf(stderr,
-                 "coloc: warning: %lld pressure solve(s) of this run did not converge "
-                 "(report.json fluid.unconverged_solves)\n",
-                 unconvergedWarned);
+    log.err(
+        "coloc: warning: %lld pressure solve(s) of this run did not converge "
+        "(report.json fluid.unconverged_solves)\n",
+        unconvergedWarned);
   const std::string path = writeReport("ok", 0, "", lastCheckpoint, 0);
   if (path.empty()) return kIoErrorStatus;
   if (root) {
     const Json& j = written;
     {
-      std::printf(
-          "coloc: %lld steps (%lld DEM sub-steps), t = %.6g s, %.3f s wall, "
+      // The steps of this run: after a restart, those from the checkpoint's step on.
+      const auto start = simulation->runStart();
+      const long long last = j["run"]["steps"].get<long long>();
+      char resumed[96] = "";
+      if (start[0] > 0)
+        std::snprintf(resumed, sizeof resumed, ", steps %lld-%lld after the restart", start[0] + 1,
+                      last);
+      log.out(
+          "coloc: %lld steps (%lld DEM sub-steps)%s, t = %.6g s, %.3f s wall, "
           "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
-          j["run"]["steps"].get<long long>(), j["run"]["dem_substeps"].get<long long>(),
+          last - start[0], j["run"]["dem_substeps"].get<long long>() - start[1], resumed,
           j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
           j["throughput"]["cell_steps_per_s"].get<double>(),
           j["throughput"]["particle_steps_per_s"].get<double>(),
           100.0 * j["fractions"]["inter_physics"].get<double>());
     }
-    std::printf("coloc: report written to %s\n", path.c_str());
+    // The phases of the loop over the ranks (LAMMPS's timing breakdown) and the figure of merit,
+    // both from the report just written; with --quiet in the log only.
+    for (const std::string& line : phaseTable(j))
+      if (opts.quiet)
+        log.file("coloc: %s\n", line.c_str());
+      else
+        log.out("coloc: %s\n", line.c_str());
+    if (j.contains("figure_of_merit"))
+      log.out("%s\n", figureOfMeritLine(j["figure_of_merit"]).c_str());
+    log.out("coloc: report written to %s\n", path.c_str());
   }
-  if (world.isRoot()) drawSnapshot(cfg, outDir, opts.quiet);
+  if (world.isRoot()) drawSnapshot(cfg, outDir, opts.quiet, log);
   return 0;
 }
 

@@ -9,14 +9,14 @@
 
 namespace coloc {
 
-inline constexpr const char* kVersionString = "coloc 0.1.0";
-
 struct RunOptions {
   std::string casePath;
   std::vector<std::string> overrides;
   std::string outDir;
   bool quiet = false;
-  std::string restart;  // --restart FILE: continue from this checkpoint
+  std::string restart;      // --restart FILE: continue from this checkpoint
+  bool overwrite = false;   // --overwrite: remove an earlier run's files in the folders first
+  std::string commandLine;  // as given (report.json provenance.command_line)
 };
 
 // Exit status of `coloc run`, the same on every rank (docs/robustness.md):

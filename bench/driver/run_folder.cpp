@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -96,6 +97,99 @@ void checkRunFiles(const RunFolders& f, const std::string& restart) {
     throw ConfigError("--restart", "'" + restart + "' is " + role +
                                        " in this run's output folder, which the run writes or "
                                        "removes: copy it elsewhere and restart from the copy");
+}
+
+bool restartInFolders(const RunFolders& f, const std::string& restart) {
+  if (restart.empty()) return false;
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(restart, ec).parent_path();
+  if (ec) return false;
+  const fs::path rel = fs::path(f.checkpointFile).lexically_normal();
+  for (const fs::path& d :
+       {fs::path(f.outDir), fs::path(f.dataDir), fs::path(f.dataDir) / rel.parent_path()}) {
+    const fs::path c = fs::weakly_canonical(d, ec);
+    if (!ec && c == dir) return true;
+  }
+  return false;
+}
+
+std::vector<std::string> previousRunFiles(const RunFolders& f) {
+  std::error_code ec;
+  const fs::path out(f.outDir), data(f.dataDir);
+  const fs::path rel = fs::path(f.checkpointFile).lexically_normal();
+  const fs::path ckDir = data / rel.parent_path();
+  const std::string ck = rel.filename().string();
+  const std::string failed = fs::path(failedCheckpointPath(ck)).string();
+  const auto startsEnds = [](const std::string& s, const std::string& head,
+                             const std::string& tail) {
+    return s.size() > head.size() + tail.size() && s.compare(0, head.size(), head) == 0 &&
+           s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const auto isOutFile = [&](const std::string& name) {
+    return name == "report.json" || name == "series.csv" || name == "log.txt" ||
+           name == "snapshot.png" || startsEnds(name, "render_", ".png");
+  };
+  const auto isDataFile = [&](const std::string& name) {
+    return name == "fields.xmf" || name == "particles.xmf" ||
+           matchesStepPattern(name, "fields_{step}.h5") ||
+           matchesStepPattern(name, "particles_{step}.h5");
+  };
+  const auto isCheckpoint = [&](const std::string& name) {
+    return matchesStepPattern(name, ck) || matchesStepPattern(name, failed);
+  };
+  std::vector<std::string> found;
+  std::vector<fs::path> seen;
+  const auto scan = [&](const fs::path& dir) {
+    if (!fs::is_directory(dir, ec)) return;
+    for (const fs::path& s : seen)
+      if (fs::equivalent(s, dir, ec)) return;
+    seen.push_back(dir);
+    const bool isOut = fs::equivalent(dir, out, ec);
+    const bool isData = fs::equivalent(dir, data, ec);
+    const bool isCk = fs::equivalent(dir, ckDir, ec);
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+      if (entry.is_directory(ec)) continue;
+      const std::string name = entry.path().filename().string();
+      if ((isOut && isOutFile(name)) || (isData && isDataFile(name)) ||
+          (isCk && isCheckpoint(name)))
+        found.push_back(entry.path().string());
+    }
+  };
+  scan(out);
+  scan(data);
+  scan(ckDir);
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+void refuseMixedRuns(const RunFolders& f, const std::vector<std::string>& files) {
+  if (files.empty()) return;
+  std::string list;
+  const std::size_t shown = std::min<std::size_t>(files.size(), 6);
+  for (std::size_t i = 0; i < shown; ++i) {
+    const fs::path rel = fs::path(files[i]).lexically_relative(f.outDir);
+    list += (i ? ", " : "") + (rel.empty() || *rel.begin() == ".." ? files[i] : rel.string());
+  }
+  if (files.size() > shown) list += " and " + std::to_string(files.size() - shown) + " more";
+  std::error_code ec;
+  const std::string where = fs::equivalent(f.outDir, f.dataDir, ec)
+                                ? "the output folder '" + f.outDir + "' holds"
+                                : "the output folders '" + f.outDir + "' (--out) and '" +
+                                      f.dataDir + "' (output.dir) hold";
+  throw ConfigError("--out", where + " the files of another run (" + list +
+                                 "): a run does not mix its files with another's; give "
+                                 "--overwrite to remove them first, another --out folder, or "
+                                 "--restart a checkpoint in this folder to continue that run");
+}
+
+void removeRunFiles(const std::vector<std::string>& files) {
+  for (const std::string& path : files) {
+    std::error_code ec;
+    fs::remove(path, ec);
+    if (ec)
+      throw IoError("--overwrite: cannot remove '" + path +
+                    "' of the earlier run: " + ec.message());
+  }
 }
 
 void removeStaleFiles(const RunFolders& f) {

@@ -41,6 +41,26 @@ class FolderLocks {
 /// writes or removes in its folders (other than its own checkpoint name). The folders exist.
 void checkRunFiles(const RunFolders& f, const std::string& restart);
 
+/// The restart file `restart` (may be empty) lies in one of the run's folders (--out, output.dir
+/// or the checkpoint's folder): the run continues the run that wrote it, in the same folders.
+bool restartInFolders(const RunFolders& f, const std::string& restart);
+
+/// The files of an earlier run that coloc knows of in the run's folders, as paths (folder /
+/// name), sorted: report.json, series.csv, log.txt, snapshot.png, render_*.png, fields.xmf,
+/// particles.xmf, fields_NNNNNN.h5, particles_NNNNNN.h5, the checkpoints of
+/// output.checkpoint_file (any {step}) and their failed state. Other programs' files, the lock
+/// and the .tmp files of an unfinished write (removeStaleFiles) are not listed.
+std::vector<std::string> previousRunFiles(const RunFolders& f);
+
+/// Throws ConfigError naming --out when `files` (previousRunFiles) is not empty: the folder holds
+/// another run's files; the message names them (the first few) and the ways out (--overwrite,
+/// another folder, --restart of a checkpoint there).
+void refuseMixedRuns(const RunFolders& f, const std::vector<std::string>& files);
+
+/// Removes `files` (--overwrite: the earlier run's files, before anything new is written).
+/// Throws IoError naming the first that cannot be removed.
+void removeRunFiles(const std::vector<std::string>& files);
+
 /// Removes what would mislead about this run: the previous run's report.json and series.csv,
 /// and the temporary files that only coloc itself makes (report.json.tmp, series.csv.tmp,
 /// fields.xmf.tmp, fields_NNNNNN.h5.tmp, <checkpoint>.tmp, rebalance.tmp.h5, ...) and that a

@@ -43,7 +43,7 @@ def env():
 
 def run(args, n, extra, out):
     cmd = shlex.split(args.launcher.format(n=n)) + [args.coloc, "run", args.case, "--quiet",
-                                                    "--out", out] + extra
+                                                    "--overwrite", "--out", out] + extra
     for s in args.set:
         cmd += ["--set", s]
     print("contact_bench:", " ".join(cmd), flush=True)

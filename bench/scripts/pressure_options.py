@@ -31,7 +31,7 @@ def run(args, name, sets, rnd):
     elif args.taskset is not None:
         cmd += ["taskset", "-c", str(args.taskset)]
     cmd += [args.coloc, "run", args.case, "--set", f"run.steps={args.steps}", "--set",
-            "run.progress_interval_s=0", "--set", "output.snapshot=false", "--out", out]
+            "run.progress_interval_s=0", "--set", "output.snapshot=false", "--overwrite", "--out", out]
     for s in sets:
         cmd += ["--set", s]
     if args.reuse and os.path.exists(os.path.join(out, "report.json")):

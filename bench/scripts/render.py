@@ -10,16 +10,41 @@ reader) at time T (default: the last output) and writes, to D (default OUT_DIR):
   render_particles.png  the particles as spheres of their true radius coloured by |v| (m/s), in
                         front of the eps plane
 
-The vertical axis is the case's gravity (report.json), else the longest axis. Exit status 0 when
-the three PNGs are written; 1 with a message when a file has no data (e.g. particles read as
-points without cells).
+The vertical axis is the case's gravity (report.json), else the longest axis. An output without
+particles (none inserted yet, or all gone) gives the particle picture of the eps plane alone.
+Exit status 0 when the three PNGs are written; 1 with a message when a file has no data (e.g.
+particles read as points without cells); 2 with a message when this ParaView draws through an X
+server and there is none (no DISPLAY): run it under `xvfb-run -a pvpython ...` then, instead of
+letting ParaView crash.
 """
 import argparse
 import json
 import os
 import sys
 
-from paraview.simple import (ColorBy, CreateView, Delete, GetColorTransferFunction,
+
+def needs_x_display():
+    """True when ParaView's render windows are X windows (Debian's ParaView) and DISPLAY is unset:
+    such a window crashes the process when it is first drawn. A ParaView built for offscreen
+    rendering (EGL, OSMesa) draws without one."""
+    if os.environ.get("DISPLAY"):
+        return False
+    try:
+        import paraview.modules.vtkRenderingOpenGL2  # noqa: F401  (registers the windows)
+        from paraview.modules.vtkRenderingCore import vtkRenderWindow
+        window = vtkRenderWindow()  # the factory's choice; opens nothing yet
+        return "XOpenGL" in window.GetClassName()
+    except Exception:  # an older layout of the modules: X is the common case on Linux
+        return sys.platform.startswith("linux")
+
+
+if needs_x_display():
+    print("render.py: no X display (DISPLAY is not set) and this ParaView draws through X: run it "
+          "as  xvfb-run -a pvpython --force-offscreen-rendering bench/scripts/render.py OUT_DIR  "
+          "(Debian: apt-get install xvfb), or set DISPLAY", file=sys.stderr)
+    sys.exit(2)
+
+from paraview.simple import (ColorBy, CreateView, Delete, GetColorTransferFunction,  # noqa: E402
                              GetScalarBar, OpenDataFile, Render, ResetCamera, SaveScreenshot,
                              Show, Slice, Text)
 
@@ -73,6 +98,7 @@ def main():
         centre[normal] = lo[normal] + (ncell // 2 + 0.5) * h
 
     parts = None
+    nparts = 0
     ppath = os.path.join(out, "particles.xmf")
     if os.path.exists(ppath):
         parts = OpenDataFile(ppath)
@@ -82,6 +108,7 @@ def main():
             print("render.py: %s: %d particles but %d cells (the default reader shows nothing)"
                   % (ppath, n.GetNumberOfPoints(), n.GetNumberOfCells()), file=sys.stderr)
             return 1
+        nparts = n.GetNumberOfPoints()
 
     sl = Slice(Input=fields)
     sl.SliceType = "Plane"
@@ -159,18 +186,21 @@ def main():
         ColorBy(d, ("CELLS", "eps"))
         d.Opacity = 0.5
         bar(v, "eps", "fluid fraction eps (1)", "Upper Right Corner")
-        pd = Show(parts, v)
-        pd.SetRepresentationType("Point Gaussian")
-        pd.ScaleByArray = 1
-        pd.SetScaleArray = ["POINTS", "radius"]
-        pd.UseScaleFunction = 0
-        pd.GaussianRadius = 1.0
-        pd.ShaderPreset = "Sphere"
-        ColorBy(pd, ("POINTS", "v", "Magnitude"))
-        pd.RescaleTransferFunctionToDataRange(True, False)
-        bar(v, "v", "particle speed (m/s)")
-        title(v, "particles coloured by speed, in front of the eps plane (%s, %d particles)"
-              % (stamp, parts.GetDataInformation().GetNumberOfPoints()))
+        if nparts > 0:
+            pd = Show(parts, v)
+            pd.SetRepresentationType("Point Gaussian")
+            pd.ScaleByArray = 1
+            pd.SetScaleArray = ["POINTS", "radius"]
+            pd.UseScaleFunction = 0
+            pd.GaussianRadius = 1.0
+            pd.ShaderPreset = "Sphere"
+            ColorBy(pd, ("POINTS", "v", "Magnitude"))
+            pd.RescaleTransferFunctionToDataRange(True, False)
+            bar(v, "v", "particle speed (m/s)")
+            title(v, "particles coloured by speed, in front of the eps plane (%s, %d particles)"
+                  % (stamp, nparts))
+        else:  # nothing to colour (no arrays): the plane alone, said so
+            title(v, "no particles at this time, the eps plane alone (%s)" % stamp)
         camera(v)
         Render(v)
         f = os.path.join(png_dir, "render_particles.png")

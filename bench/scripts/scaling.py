@@ -3,7 +3,7 @@
 write a CSV table and PNG plots.
 
     bench/scripts/scaling.py bench/cases/case3-small.json --ranks 1 2 4 --repeat 2 \
-        --modes coupled fluid particles --coloc build/coloc      # -> bench/results/case3-small/
+        --modes coupled fluid particles --coloc build/coloc      # -> out/case3-small-scaling/
 
 On a cluster pass the launcher, e.g. --launcher "srun -n {n}" (default
 "mpiexec -n {n} --bind-to none") and --cores (the cores available, for the oversubscription
@@ -14,7 +14,9 @@ environment sets it). --plot-only re-plots an existing scaling.csv. Lines are th
 repeat, bands the min-max over the repeats; a share of exactly 0 is drawn as a cross at the
 floor of the log axis and named in the legend.
 
-Outputs (in --out, default bench/results/<case name>/): scaling.csv (one row per run; per-run
+Outputs (in --out, default out/<case name>-scaling/ under the current folder, beside the
+out/<case name>/ of `coloc run`; the source tree's bench/results/ only when asked for with --out
+bench/results/...): scaling.csv (one row per run; per-run
 folders under runs/, not committed), speedup.png (each mode's speedup over its smallest rank
 count, fastest repeat), shares.png (fluid / particles / coupling arithmetic / inter-physics
 shares of each coupled mode's step against ranks), inter_physics.png (the inter-physics exchange
@@ -42,7 +44,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 def run_point(args, n, mode, rep):
     out = os.path.join(args.out, "runs", f"{mode}_np{n}_r{rep}")
     launcher = args.launcher.format(n=n)
-    cmd = shlex.split(launcher) + [args.coloc, "run", args.case, "--quiet", "--out", out,
+    cmd = shlex.split(launcher) + [args.coloc, "run", args.case, "--quiet", "--overwrite", "--out", out,
                                    "--set", f"run.mode={mode}"]
     for s in args.set:
         cmd += ["--set", s]
@@ -225,6 +227,12 @@ def plot(rows, args, cores):
     plt.close(fig)
 
 
+def default_out(case):
+    """Where a run writes without --out: out/<case name>-scaling under the current folder (as
+    `coloc run` writes out/<case name>), never into the source tree's bench/results/."""
+    return os.path.join(os.getcwd(), "out", os.path.basename(case).replace(".json", "") + "-scaling")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("case")
@@ -246,7 +254,7 @@ def main():
     args = p.parse_args(argv)
     args.set += extra
     if args.out is None:
-        args.out = os.path.join(ROOT, "bench", "results", os.path.basename(args.case).replace(".json", ""))
+        args.out = default_out(args.case)
     os.makedirs(args.out, exist_ok=True)
     csv_path = os.path.join(args.out, "scaling.csv")
     rows = []

@@ -97,7 +97,7 @@ def main():
             for s in a.strategies:
                 for rep in range(a.repeat):
                     out = os.path.join(a.out, "runs", f"{s}_np{n}" + (f"_r{rep}" if a.repeat > 1 else ""))
-                    cmd = shlex.split(a.launcher.format(n=n)) + [a.coloc, "run", a.case, "--quiet", "--out",
+                    cmd = shlex.split(a.launcher.format(n=n)) + [a.coloc, "run", a.case, "--quiet", "--overwrite", "--out",
                                                                  out, "--set", f"partition.strategy={s}"]
                     for kv in a.set:
                         cmd += ["--set", kv]

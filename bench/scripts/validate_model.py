@@ -127,14 +127,14 @@ def run_all(a, runs):
                 out = os.path.join(d, "%s-%d" % (kind, i))
                 print("%s %s %d/%d  (%s)" % (name, kind, i + 1, a.repeats, uptime()), flush=True)
                 nr = 1 if kind.startswith("np1") else int(kind[2:])
-                cmd = mpirun(nr) + [a.coloc, "run", case, "--out", out] + extra
+                cmd = mpirun(nr) + [a.coloc, "run", case, "--overwrite", "--out", out] + extra
                 co = None
                 if kind == "np1corun" and a.corunner == "self":
                     # the same 1-rank run on the other core, over and over until this one ends;
                     # then the loop stops after its current run (killing mpirun would orphan
                     # the coloc it started, which would run on beside the next runs)
                     partner = " ".join(shlex.quote(x) for x in mpirun(1) + [
-                        a.coloc, "run", case, "--out", out + "-partner"] + extra)
+                        a.coloc, "run", case, "--overwrite", "--out", out + "-partner"] + extra)
                     stop = shlex.quote(out + "-partner.stop")
                     co = subprocess.Popen(["bash", "-c", "rm -f %s; while [ ! -e %s ]; do %s; "
                                            "done" % (stop, stop, partner)],

@@ -8,6 +8,7 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/io/h5io.hpp"
+#include "coloc/io/library_version.hpp"
 
 namespace coloc {
 namespace {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -51,6 +52,16 @@ std::string num(double v) {
   return std::string(b, r.ptr);
 }
 
+// A time as ParaView's time controls should show it: 12 significant digits, so that the round-off
+// of a time summed step by step goes (0.1, not 0.10000000000000007; 1.25, not 1.2499999999999731).
+// Steps closer than 1e-12 of the time apart would share a label, far below any dt coloc takes.
+// The HDF5 files keep the exact time (their "time" attribute).
+std::string timeText(double t) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.12g", t);
+  return b;
+}
+
 }  // namespace
 
 // ---- XDMF ---------------------------------------------------------------------------------------
@@ -94,7 +105,7 @@ std::string XdmfSeries::xml() const {
         << "</DataItem>\n";
     };
     o << "   <Grid Name=\"" << xmlEscape(name_) << "_" << s.step << "\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << num(s.time) << "\"/>\n";
+      << "    <Time Value=\"" << timeText(s.time) << "\"/>\n";
     if (particles_) {
       // N one-point cells. The explicit connectivity matters: without it the Xdmf3 readers
       // (ParaView's default) make the N points but no cells, and Surface shows nothing.

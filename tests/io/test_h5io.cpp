@@ -459,6 +459,25 @@ TEST(H5Io, XdmfIndex) {
   EXPECT_NE(y.find("NumberType=\"Int\" Precision=\"8\""), std::string::npos);
 }
 
+TEST(H5Io, XdmfTimesWithoutRoundOff) {
+  // Times summed step by step carry round-off (0.1 as 0.09999999999999999 after ten steps of
+  // 0.01); the index shows them as a person would write them.
+  double t = 0;
+  for (int i = 0; i < 10; ++i) t += 0.01;
+  ASSERT_NE(t, 0.1);
+  auto pts = XdmfSeries::particles("particles");
+  pts.add({t, 10, "a.h5", 1, "/x", {}, "/vertex"});
+  pts.add({1.2499999999999731, 125, "b.h5", 1, "/x", {}, "/vertex"});
+  pts.add({0.10000000000000007, 1000, "c.h5", 1, "/x", {}, "/vertex"});
+  pts.add({2.5e-7, 2000, "d.h5", 1, "/x", {}, "/vertex"});
+  const std::string y = pts.xml();
+  EXPECT_EQ(y.find("0.0999999"), std::string::npos) << y;
+  EXPECT_EQ(y.find("0.1000000"), std::string::npos) << y;
+  EXPECT_NE(y.find("<Time Value=\"0.1\"/>"), std::string::npos) << y;
+  EXPECT_NE(y.find("<Time Value=\"1.25\"/>"), std::string::npos) << y;
+  EXPECT_NE(y.find("<Time Value=\"2.5e-07\"/>"), std::string::npos) << y;
+}
+
 TEST(H5Io, OutputWriterSeries) {
   const Comm w = Comm::world();
   const auto g = grid();

@@ -12,7 +12,9 @@
 #   paraview     with ParaView's default reader (OpenDataFile) particles.xmf gives N points AND N
 #                cells and fields.xmf nx*ny*nz cells at every output time, with their arrays
 #   render       render.py writes its three PNGs (offscreen; through xvfb-run when there is no
-#                X display)
+#                X display); on an output without particles too, without a warning
+#   nodisplay    render.py without DISPLAY either renders (a ParaView that draws offscreen) or
+#                exits 2 saying that there is no X display; never killed by a signal
 # paraview and render exit 77 (SKIPPED) where there is no pvpython; render also where there is
 # neither an X display nor xvfb-run (Debian's ParaView renders through X).
 set -u
@@ -113,12 +115,26 @@ EOF
   grep -q "no fields_" <<<"$out" || fail "snapshot.py message: $out"
   echo "PASS: snapshot"
   ;;
-paraview | render)
+paraview | render | nodisplay)
   if [[ -z "$pvpython" || ! -x "$pvpython" ]]; then
     echo "SKIPPED: no pvpython (install ParaView, e.g. apt-get install paraview, and re-run cmake)"
     exit 77
   fi
   xvfb=()
+  if [[ $test == nodisplay ]]; then
+    run 1 "$work/r" --set output.interval_steps=5 --set output.snapshot=false --set run.steps=5
+    timeout 300 env -u DISPLAY "$pvpython" --force-offscreen-rendering "$scripts/render.py" \
+      "$work/r" > "$work/render.log" 2>&1
+    rc=$?
+    cat "$work/render.log"
+    [[ $rc -lt 124 ]] || fail "render.py without a display ended with $rc (killed by a signal?)"
+    if [[ $rc -ne 0 ]]; then
+      [[ $rc -eq 2 ]] || fail "render.py without a display exited $rc, expected 0 or 2"
+      grep -q "render.py: no X display" "$work/render.log" || fail "no message about the display"
+    fi
+    echo "PASS: nodisplay (exit $rc)"
+    exit 0
+  fi
   if [[ $test == render && -z "${DISPLAY:-}" ]]; then
     if ! command -v xvfb-run > /dev/null; then
       echo "SKIPPED: no X display and no xvfb-run (apt-get install xvfb) for pvpython to render"
@@ -164,6 +180,16 @@ EOF
   for f in render_eps render_speed render_particles; do
     [[ -s "$work/r/$f.png" ]] || fail "no $f.png"
   done
+  # an output without particles: the three pictures, no warning
+  run 1 "$work/empty" --set output.interval_steps=5 --set output.snapshot=false \
+    --set run.steps=5 --set 'particles.sources=[]'
+  timeout 300 "${xvfb[@]}" "$pvpython" --force-offscreen-rendering "$scripts/render.py" \
+    "$work/empty" > "$work/render_empty.log" 2>&1
+  rc=$?
+  tail -5 "$work/render_empty.log"
+  [[ $rc -eq 0 ]] || fail "render.py on an output without particles exited $rc"
+  grep -qi "warn" "$work/render_empty.log" && fail "render.py warned on an output without particles"
+  [[ -s "$work/empty/render_particles.png" ]] || fail "no render_particles.png without particles"
   echo "PASS: render.py"
   ;;
 *) fail "unknown test $test" ;;

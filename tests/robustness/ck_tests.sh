@@ -86,6 +86,10 @@ case $test in
     $cmp "$work/a/ck_000010.h5" "$work/b/ck_000010.h5" || fail "final checkpoints differ"
     same_series_tail "$work/a/series.csv" "$work/b/series.csv"
     [[ $(wc -l < "$work/b/series.csv") -eq 6 ]] || fail "restart series should hold steps 6-10"
+    # the closing line counts the steps this run made (5), not the total (10)
+    grep -q "^coloc: 10 steps (" "$work/a.log" || { cat "$work/a.log"; fail "run a's step count"; }
+    grep -q "^coloc: 5 steps ([0-9]* DEM sub-steps), steps 6-10 after the restart" "$work/b.log" ||
+      { cat "$work/b.log"; fail "the restart's closing line does not count its own 5 steps"; }
     same_report "$work/a/report.json" "$work/b/report.json"
     ;;
   interval)
@@ -169,27 +173,32 @@ EOF
       { cat "$work/a.log"; fail "run failed"; }
     echo "not an HDF5 file" > "$work/corrupt.h5"
     head -c 3000 "$work/a/checkpoint.h5" > "$work/truncated.h5"
+    # each refusal in a folder of its own (a refused run leaves its report.json)
+    i=0
     for t in "no such file|$work/missing.h5" "cannot open|$work/corrupt.h5" \
              "checkpoint '$work/truncated.h5'|$work/truncated.h5"; do
+      i=$((i + 1))
       "$expect" "${t%%|*}" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out \
-        "$work/x" --quiet --restart "${t#*|}" || fail "--restart ${t#*|}"
+        "$work/x$i" --quiet --restart "${t#*|}" || fail "--restart ${t#*|}"
     done
     "$expect" "its grid has 4x4x16 cells, the case 4x4x20" -- "$mpiexec" -n 2 --bind-to none \
-      "$coloc" run "$case" --out "$work/x" --quiet --set "domain.cells=[4,4,20]" \
+      "$coloc" run "$case" --out "$work/grid" --quiet --set "domain.cells=[4,4,20]" \
       --restart "$work/a/checkpoint.h5" || fail "restart on another grid"
     "$expect" "it was written in run.mode coupled" -- "$mpiexec" -n 2 --bind-to none \
-      "$coloc" run "$case" --out "$work/x" --quiet --set run.mode=fluid \
+      "$coloc" run "$case" --out "$work/mode" --quiet --set run.mode=fluid \
       --restart "$work/a/checkpoint.h5" || fail "restart in another mode"
     ;;
   damaged)
     run 2 "$work/a" --set run.steps=4 --set output.checkpoint_interval=4 ||
       { cat "$work/a.log"; fail "run failed"; }
     good=$work/a/checkpoint.h5
-    damage() {  # damage EXPECTED MODE DATASET ARG
+    n=0
+    damage() {  # damage EXPECTED MODE DATASET ARG (each refusal in a folder of its own)
       local bad=$work/bad.h5
+      n=$((n + 1))
       "$py" "$here/damage_checkpoint.py" "$good" "$bad" "$2" "$3" "$4" || fail "damaging $3"
-      "$expect" "$1" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" --out "$work/x" \
-        --quiet --restart "$bad" > "$work/damaged.log" 2>&1
+      "$expect" "$1" -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" \
+        --out "$work/x$n" --quiet --restart "$bad" > "$work/damaged.log" 2>&1
       local rc=$?
       cat "$work/damaged.log"
       [[ $rc -eq 0 ]] || fail "damaged $3 ($2) not refused as expected"
@@ -234,6 +243,20 @@ EOF2
     done
     "$expect" "an inlet but no outlet" -- "$coloc" check "$case" --ranks 2 \
       --set 'fluid.boundary.zhi={"type":"wall"}' || fail "check of a bad case"
+    # a CFL the run stops at in its first step: check refuses the case (and the run does stop);
+    # one the inlet alone keeps below fluid.cfl_max stays valid (and runs)
+    fast="fluid.boundary.zlo.velocity=[0,0,5]"
+    "$expect" "fluid.dt: the CFL of the first step would be at least 2 " -- "$coloc" check "$case" \
+      --ranks 2 --set "$fast" || fail "check of a case whose CFL stops the run"
+    "$expect" "the run failed in step 1 " -- "$mpiexec" -n 2 --bind-to none "$coloc" run "$case" \
+      --out "$work/cfl" --quiet --set run.steps=2 --set "$fast" || fail "the fast inlet did not stop the run"
+    grep -q "exceeds fluid.cfl_max" "$work/cfl/report.json" || fail "the run did not stop for its CFL"
+    slow="fluid.boundary.zlo.velocity=[0,0,1]"
+    timeout 60 "$coloc" check "$case" --ranks 2 --set "$slow" > "$work/check_slow.txt" 2>&1 ||
+      { cat "$work/check_slow.txt"; fail "check refused an inlet below fluid.cfl_max"; }
+    grep -q "CFL 1.33, at least 0.4 (fluid.cfl_max = 1)" "$work/check_slow.txt" ||
+      { cat "$work/check_slow.txt"; fail "no CFL range"; }
+    run 2 "$work/slow" --set run.steps=2 --set "$slow" || { cat "$work/slow.log"; fail "the slow inlet's run failed"; }
     "$expect" "a run on 2 rank(s) here would be refused" -- "$coloc" check "$case" --ranks 2 \
       --set 'domain.cells=[4000,4000,4000]' || fail "check of a case too large"
     "$expect" "no case-file key starts with this" -- "$coloc" keys particles.nope || fail "keys"

@@ -96,7 +96,9 @@ case $test in
       extra=(--restart "$work/base/checkpoint.h5")
     fi
     mkdir -p "$work/a" && echo '{"status": "ok", "stale": true}' > "$work/a/report.json"
-    COLOC_FAULT="$point:$rank:$step:$kind" run "$faults" "$work/a" "${common[@]}" "${extra[@]}"
+    # --overwrite: the planted report stands for an earlier run's, replaced on purpose
+    COLOC_FAULT="$point:$rank:$step:$kind" run "$faults" "$work/a" "${common[@]}" "${extra[@]}" \
+      --overwrite
     cat "$log"
     echo "exit $rc after $secs s"
     [[ $rc -eq $code ]] || fail "exit status $rc, expected $code"
@@ -106,7 +108,7 @@ case $test in
     # a rank stopped by the deadline (MPI_Abort) may leave a .tmp, never a partial file under
     # the real name; the next run in the folder removes it
     files_good "$work/a" keep-tmp
-    run "$coloc" "$work/a" --set run.steps=1
+    run "$coloc" "$work/a" --set run.steps=1 --overwrite
     [[ $rc -eq 0 ]] || { cat "$log"; fail "the next run in the folder failed"; }
     files_good "$work/a"
     ;;
@@ -118,7 +120,7 @@ case $test in
     # print "out of memory" and leave report.json "failed" with out_of_memory = true
     kind=$1 rank=$2
     mkdir -p "$work/a" && echo '{"status": "ok", "stale": true}' > "$work/a/report.json"
-    COLOC_FAULT="fluid:$rank:3:$kind" run "$faults" "$work/a" "${common[@]}"
+    COLOC_FAULT="fluid:$rank:3:$kind" run "$faults" "$work/a" "${common[@]}" --overwrite
     cat "$log"
     echo "exit $rc after $secs s"
     [[ $rc -eq 3 ]] || fail "exit status $rc, expected 3"
@@ -128,14 +130,14 @@ case $test in
     "$py" -c 'import json,sys; r=json.load(open(sys.argv[1])); sys.exit(0 if r.get("out_of_memory") is True and r.get("exit_code")==3 else 1)' \
       "$work/a/report.json" || fail "report.json lacks out_of_memory = true and exit_code 3"
     [[ -f $work/a/checkpoint.failed.h5 ]] && fail "a failed checkpoint was written out of memory"
-    run "$coloc" "$work/a" --set run.steps=1
+    run "$coloc" "$work/a" --set run.steps=1 --overwrite
     [[ $rc -eq 0 ]] || { cat "$log"; fail "the next run in the folder failed"; }
     files_good "$work/a"
     ;;
   blowup)
     # an inlet far too fast: exit 3, report.json "failed" naming the failed state, which exists
     mkdir -p "$work/a" && echo '{"status": "ok", "stale": true}' > "$work/a/report.json"
-    run "$coloc" "$work/a" "${common[@]}" --set "fluid.boundary.zlo.velocity=[0,0,5]"
+    run "$coloc" "$work/a" "${common[@]}" --set "fluid.boundary.zlo.velocity=[0,0,5]" --overwrite
     cat "$log"
     [[ $rc -eq 3 ]] || fail "exit $rc, expected 3"
     once "$log" "exceeds fluid.cfl_max"

@@ -17,6 +17,11 @@
 #   restart    --restart of a file that the run would overwrite or remove in its own folder
 #              (rebalance.tmp.h5, fields_NNNNNN.h5) is refused and the file kept; a restart in
 #              place from its own checkpoint runs
+#   mixed      runs never mix in one folder: a second run into a folder that holds another run's
+#              files (report.json, fields_*.h5, the .xmf, the checkpoint) is refused on every
+#              rank, naming them, and changes nothing; also through output.dir, and a --restart of
+#              a checkpoint from elsewhere; --overwrite removes the earlier run's files first
+#              (another program's file stays); --restart of the folder's own checkpoint continues
 #   fifo       a FIFO as case file (run, check) or as --restart file: refused at once
 #   deep       a case file with a 100,000-deep list (check, run) and a 50,000-deep --set value:
 #              refused within seconds, naming the file and line / the key
@@ -140,10 +145,11 @@ case $test in
     "$py" -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(d['status']!='interrupted')" \
       "$out/report.json" || fail "the first run's report"
     # the lock goes with the run: the folder is free now, also after a run killed outright
-    run 2 "$out"
+    # (--overwrite: each later run replaces the one before in the folder, on purpose)
+    run 2 "$out" --overwrite
     [[ $rc -eq 0 ]] || { cat "$log"; fail "the folder is still locked after the first run"; }
     "$mpiexec" -n 1 --bind-to none "$coloc" run "$case" --out "$out" --set run.steps=1000000 \
-      > "$work/killed.log" 2>&1 &
+      --overwrite > "$work/killed.log" 2>&1 &
     mpi=$!
     for _ in $(seq 100); do
       sleep 0.2
@@ -152,7 +158,7 @@ case $test in
     done
     kill -KILL "$rank"
     wait "$mpi"
-    run 2 "$out"
+    run 2 "$out" --overwrite
     [[ $rc -eq 0 ]] || { cat "$log"; fail "a SIGKILLed run left a stale lock"; }
     ;;
   restart)
@@ -174,6 +180,41 @@ case $test in
     run 2 "$work/b" --set run.steps=4 --set output.checkpoint_interval=2 \
       --restart "$work/b/checkpoint.h5"
     [[ $rc -eq 0 ]] || { cat "$log"; fail "restart from the run's own checkpoint refused"; }
+    ;;
+  mixed)
+    out=$work/a
+    steps() {  # the steps report.json $1 says were run
+      "$py" -c "import json,sys; print(json.load(open(sys.argv[1]))['run']['steps'])" "$1"
+    }
+    run 2 "$out" --set run.steps=4 --set output.interval_steps=2 "${ck[@]}"
+    [[ $rc -eq 0 ]] || { cat "$log"; fail "the first run failed"; }
+    echo "another program's" > "$out/notes.txt"
+    run 2 "$out" --set run.steps=2
+    refused "--out: the output folder '$out' holds the files of another run ("
+    grep -qF "checkpoint.h5, fields.xmf, fields_000000.h5" "$log" || { cat "$log"; fail "files not named"; }
+    [[ $(steps "$out/report.json") -eq 4 ]] || fail "the refused run changed report.json"
+    [[ -f $out/fields_000004.h5 && -f $out/series.csv ]] || fail "the refused run removed files"
+    # through output.dir, and a restart of a checkpoint from elsewhere into a used folder
+    run 2 "$work/c" --set "output.dir=$out"
+    refused "the output folders '$work/c' (--out) and '$out' (output.dir) hold the files of another run ($out/"
+    cp "$out/checkpoint.h5" "$work/ck.h5"
+    run 2 "$out" --set run.steps=6 --restart "$work/ck.h5"
+    refused "holds the files of another run"
+    # --overwrite: the earlier run's files go first, another program's stay
+    run 2 "$out" --set run.steps=2 --set output.interval_steps=2 "${ck[@]}" --overwrite
+    [[ $rc -eq 0 ]] || { cat "$log"; fail "--overwrite was refused"; }
+    [[ $(steps "$out/report.json") -eq 2 ]] || fail "the report is not the new run's"
+    for f in fields_000004.h5 particles_000004.h5; do
+      [[ -e $out/$f ]] && fail "--overwrite kept the earlier run's $f"
+    done
+    grep -q "000004" "$out/fields.xmf" && fail "fields.xmf still lists the earlier run's step 4"
+    [[ -f $out/notes.txt ]] || fail "--overwrite removed another program's file"
+    # a restart of the folder's own checkpoint continues that run in it
+    run 2 "$out" --set run.steps=4 --set output.interval_steps=2 "${ck[@]}" \
+      --restart "$out/checkpoint.h5"
+    [[ $rc -eq 0 ]] || { cat "$log"; fail "the restart in its own folder was refused"; }
+    [[ $(steps "$out/report.json") -eq 4 && -f $out/fields_000004.h5 ]] ||
+      fail "the restart did not continue to step 4"
     ;;
   fifo)
     mkfifo "$work/case.fifo" "$work/ck.fifo" || fail "mkfifo"

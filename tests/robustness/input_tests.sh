@@ -16,6 +16,15 @@
 #   restart_changes   a restart with another density and source count: the notes and
 #                     report.json restart.{kept_from_checkpoint,taken_from_case}
 #   restart_nothing   a restart whose run.steps is at the checkpoint's step: exit 2, report failed
+#   provenance        report.json's provenance: every key, each plausible (the date now, this
+#                     host, cores online, the rank count, oversubscribed exactly when a node has
+#                     more ranks than cores, the source tree's git commit, the version of the top
+#                     CMakeLists.txt, the MPI / hypre / HDF5 versions, the command line)
+#   log               OUT/log.txt holds what rank 0 prints, progress lines included (also with
+#                     --quiet, which keeps the phase table off the terminal only); the phase
+#                     table's rows and sums are report.json's timers and run.wall_s; the figure of
+#                     merit line is report.json's figure_of_merit, throughput over the cores used;
+#                     a restart continuing in its folder appends to the log
 #   pressure_max_iter fluid.pressure.max_iter = 1: a warning and fluid.unconverged_solves; with
 #                     fluid.pressure.on_no_convergence = error: exit 3 naming the key
 set -u
@@ -154,6 +163,126 @@ case $test in
     expect 0 "report written"
     grep -q "warning" "$log" && fail "a warning where every solve converged"
     json "$work/c/report.json" "d['fluid']['unconverged_solves'] == 0"
+    ;;
+  provenance)
+    src=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+    cores=$(getconf _NPROCESSORS_ONLN)
+    runs=(2)
+    ((cores <= 4)) && runs+=($((cores + 1)))  # one more rank than cores: oversubscribed
+    for np in "${runs[@]}"; do
+      run "np$np" "$mpiexec" -n "$np" --bind-to none "$coloc" run "$bed" --out "$work/np$np" \
+        --quiet --set run.steps=1 --set 'description=a b'
+      expect 0 "report written"
+      "$py" - "$work/np$np/report.json" "$np" "$cores" "$src" "$bed" <<'PYEOF' || fail "provenance ($np ranks)"
+import datetime, json, re, socket, subprocess, sys
+d = json.load(open(sys.argv[1]))
+np, cores, src, bed = int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5]
+p = d["provenance"]
+print(json.dumps(p, indent=1))
+keys = ["date", "host", "cpu_model", "cores", "ranks", "nodes", "ranks_per_node_max",
+        "oversubscribed", "cores_used", "coloc_version", "git_commit", "git_dirty", "compiler",
+        "compiler_flags", "build_type", "mpi_library", "hypre_version", "hdf5_version",
+        "command_line"]
+missing = [k for k in keys if k not in p]
+assert not missing, missing
+when = datetime.datetime.strptime(p["date"], "%Y-%m-%dT%H:%M:%SZ")
+age = datetime.datetime.utcnow() - when
+assert datetime.timedelta(0) <= age < datetime.timedelta(minutes=10), age
+assert p["host"] == socket.gethostname(), p["host"]
+assert p["cpu_model"] and p["cpu_model"] != "unknown", p["cpu_model"]
+assert p["cores"] == cores and p["ranks"] == np and p["nodes"] == 1, p
+assert p["ranks_per_node_max"] == np, p
+assert p["oversubscribed"] is (np > cores), (np, cores, p["oversubscribed"])
+assert p["cores_used"] == min(np, cores), (np, cores, p["cores_used"])
+version = re.search(r"project\(coloc VERSION ([0-9.]+)", open(src + "/CMakeLists.txt").read())
+assert p["coloc_version"] == version.group(1) == d["coloc_version"], p["coloc_version"]
+git = subprocess.run(["git", "-C", src, "rev-parse", "HEAD"], capture_output=True, text=True)
+if git.returncode == 0:
+    assert re.fullmatch(r"[0-9a-f]{40}", p["git_commit"]), p["git_commit"]
+    assert isinstance(p["git_dirty"], bool), p["git_dirty"]
+else:
+    assert p["git_commit"] == "unknown", p["git_commit"]
+assert re.match(r"(GNU|Clang|AppleClang|IntelLLVM|Intel) [0-9]+\.", p["compiler"]), p["compiler"]
+assert isinstance(p["build_type"], str), p["build_type"]
+if p["build_type"] in ("Release", "RelWithDebInfo"):
+    assert "-O" in p["compiler_flags"], p["compiler_flags"]
+assert p["compiler_flags"] == p["compiler_flags"].strip(), p["compiler_flags"]
+assert re.search(r"(Open MPI|MPICH|Intel\(R\) MPI|MVAPICH)", p["mpi_library"]), p["mpi_library"]
+assert "\n" not in p["mpi_library"], p["mpi_library"]
+assert re.fullmatch(r"[0-9]+\.[0-9]+\.[0-9]+.*", p["hypre_version"]), p["hypre_version"]
+assert re.fullmatch(r"[0-9]+\.[0-9]+\.[0-9]+", p["hdf5_version"]), p["hdf5_version"]
+cl = p["command_line"]
+assert " run " in cl and bed in cl and "run.steps=1" in cl and "'description=a b'" in cl, cl
+PYEOF
+    done
+    ;;
+  log)
+    run loud "${two[@]}" "$coloc" run "$bed" --out "$work/a" --set run.steps=4 \
+      --set run.progress_interval_s=1e-9 --set output.checkpoint_interval=2
+    expect 0 "report written"
+    [[ -f $work/a/log.txt ]] || fail "no log.txt"
+    n=$(grep -c "^coloc: step [0-9]*/4 " "$log")
+    [[ $n -eq 4 ]] || fail "$n progress lines on the terminal, expected 4"
+    while IFS= read -r line; do
+      grep -qxF -- "$line" "$work/a/log.txt" || fail "not in log.txt: $line"
+    done < "$log"
+    check_table() {  # check_table LOG REPORT: the table and the figure of merit against the report
+      "$py" - "$1" "$2" <<'PYEOF' || fail "the phase table or the figure of merit of $1"
+import json, re, sys
+text, d = open(sys.argv[1]).read(), json.load(open(sys.argv[2]))
+lines = text.splitlines()
+start = next(i for i, l in enumerate(lines) if l.startswith("coloc:   phase (over ranks)"))
+rows, sums = {}, {}
+for l in lines[start + 1:]:
+    m = re.match(r"coloc:   (\S+)\s+([-0-9.e+]+)\s+([-0-9.e+]+)\s+([-0-9.e+]+)\s+([-0-9.]+)$", l)
+    if m:
+        rows[m.group(1)] = [float(m.group(i)) for i in range(2, 6)]
+        continue
+    m = re.match(r"coloc:   (phases \(sum\)|other \(in no phase\)|loop \(run.wall_s\))\s+([-0-9.e+]+)\s+([-0-9.]+)$", l)
+    if m:
+        sums[m.group(1).split()[0]] = (float(m.group(2)), float(m.group(3)))
+        continue
+    if l.startswith("coloc:   setup"):
+        continue
+    break
+close = lambda a, b: abs(a - b) <= 1e-5 * max(abs(a), abs(b)) + 1e-12
+timers = {k: v for k, v in d["timers"].items() if k != "setup"}
+wall = d["run"]["wall_s"]
+assert set(rows) == set(timers), (sorted(rows), sorted(timers))
+for k, (mn, avg, mx, pct) in rows.items():
+    t = timers[k]
+    assert close(mn, t["min"]) and close(avg, t["avg"]) and close(mx, t["max"]), (k, rows[k], t)
+    assert abs(pct - 100 * t["avg"] / wall) < 0.006, (k, pct)
+total = sum(t["avg"] for t in timers.values())
+assert close(sums["phases"][0], total), (sums["phases"], total)
+assert close(sums["loop"][0], wall) and close(sums["other"][0], wall - total), sums
+assert abs(sums["phases"][1] + sums["other"][1] - 100) < 0.02, sums
+f, p = d["figure_of_merit"], d["provenance"]
+assert f["cores"] == p["cores_used"] > 0, (f, p["cores_used"])
+assert close(f["particle_steps_per_s_per_core"], d["throughput"]["particle_steps_per_s"] / f["cores"])
+assert close(f["cell_steps_per_s_per_core"], d["throughput"]["cell_steps_per_s"] / f["cores"])
+assert f["inter_physics_share"] == d["fractions"]["inter_physics"]
+m = re.search(r"^coloc: figure of merit: ([0-9.e+]+) particle-steps/s/core, ([0-9.e+]+) cell-steps/s/core, inter-physics ([0-9.e+-]+)% of the step \((\d+) cores\)$", text, re.M)
+assert m, "no figure-of-merit line"
+assert abs(float(m.group(1)) / f["particle_steps_per_s_per_core"] - 1) < 1e-3, m.group(1)
+assert abs(float(m.group(2)) / f["cell_steps_per_s_per_core"] - 1) < 1e-3, m.group(2)
+assert int(m.group(4)) == f["cores"]
+print("table:", len(rows), "phases, sum", total, "of", wall, "s; figure of merit", f)
+PYEOF
+    }
+    check_table "$work/a/log.txt" "$work/a/report.json"
+    # --quiet: the table in the log only
+    run quiet "${two[@]}" "$coloc" run "$bed" --out "$work/q" --quiet --set run.steps=2
+    expect 0 "figure of merit"
+    grep -q "phase (over ranks)" "$log" && fail "--quiet printed the phase table"
+    check_table "$work/q/log.txt" "$work/q/report.json"
+    # a restart continuing in its folder: the log goes on
+    run more "${two[@]}" "$coloc" run "$bed" --out "$work/a" --set run.steps=6 \
+      --set run.progress_interval_s=1e-9 --restart "$work/a/checkpoint.h5"
+    expect 0 "report written"
+    grep -q "^coloc: step 2/4 " "$work/a/log.txt" || fail "the restart dropped the earlier log"
+    grep -q "^coloc: ---- the run continues (--restart) ----" "$work/a/log.txt" || fail "no mark"
+    grep -q "^coloc: step 6/6 " "$work/a/log.txt" || fail "the restart's progress is not logged"
     ;;
   *) fail "unknown test $test" ;;
 esac

@@ -260,7 +260,7 @@ def channel(args):
                 res = {}
                 for n in (1, args.steps + 1):
                     out = os.path.join(work, f"coloc-r{rnd}-n{n}")
-                    wall, cpu = timed(ts + [args.coloc, "run", args.case, "--quiet", "--out", out,
+                    wall, cpu = timed(ts + [args.coloc, "run", args.case, "--quiet", "--overwrite", "--out", out,
                                             "--set", f"run.steps={n}"] + sets,
                                       out + ".log")
                     rep = json.load(open(os.path.join(out, "report.json")))

@@ -6,10 +6,9 @@
 #include "coloc/core/comm.hpp"
 #include "coloc/core/config.hpp"
 #include "coloc/core/timers.hpp"
+#include "coloc/core/version.hpp"  // kVersion, from CMake's project(VERSION)
 
 namespace coloc {
-
-inline constexpr const char* kVersion = "0.1.0";
 
 class Report {
  public:

@@ -1,0 +1,26 @@
+// coloc/core/provenance.hpp — where a run comes from: report.json's "provenance" (docs/output.md):
+// when and where it ran, on what, how the program was built, and the command that started it.
+#pragma once
+
+#include <string>
+
+#include "coloc/core/comm.hpp"
+#include "coloc/core/config.hpp"
+#include "coloc/core/version.hpp"
+
+namespace coloc {
+
+/// Collective. The keys core knows: date (UTC, ISO 8601), host (rank 0's), cpu_model
+/// (/proc/cpuinfo), cores (online, on rank 0's node), ranks, nodes, ranks_per_node_max,
+/// oversubscribed (some node runs more ranks than it has cores online), cores_used (the sum over
+/// nodes of min(ranks, cores): the cores of a figure of merit), coloc_version,
+/// git_commit and git_dirty (of the source tree at build time; "unknown" outside a git
+/// checkout), compiler, compiler_flags, build_type, mpi_library (MPI_Get_library_version) and
+/// command_line. The versions of the libraries core does not link (hypre, HDF5) are the
+/// caller's to add.
+Json provenance(const Comm& comm, const std::string& commandLine);
+
+/// The command line as a shell would take it back: each argument quoted where it needs to be.
+std::string commandLineText(int argc, const char* const* argv);
+
+}  // namespace coloc
