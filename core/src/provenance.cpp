@@ -84,8 +84,12 @@ Json provenance(const Comm& comm, const std::string& commandLine) {
   p["ranks"] = comm.size();
   p["nodes"] = nodes;
   p["ranks_per_node_max"] = perNode;
-  p["oversubscribed"] = over != 0;
-  p["cores_used"] = used;
+  // Under SimGrid SMPI (docs/smpi.md) the nodes and ranks are the simulated cluster's, each rank
+  // on a simulated core of its own; cores and cpu_model are the machine running the simulation.
+  const bool simulated = mpiIsSimulated();
+  p["simulated"] = simulated;
+  p["oversubscribed"] = !simulated && over != 0;
+  p["cores_used"] = simulated ? static_cast<long long>(comm.size()) : used;
   p["coloc_version"] = kVersion;
   p["git_commit"] = COLOC_GIT_COMMIT;
   const std::string dirty = COLOC_GIT_DIRTY;

@@ -182,7 +182,7 @@ print(json.dumps(p, indent=1))
 keys = ["date", "host", "cpu_model", "cores", "ranks", "nodes", "ranks_per_node_max",
         "oversubscribed", "cores_used", "coloc_version", "git_commit", "git_dirty", "compiler",
         "compiler_flags", "build_type", "mpi_library", "hypre_version", "hdf5_version",
-        "command_line"]
+        "command_line", "simulated"]
 missing = [k for k in keys if k not in p]
 assert not missing, missing
 when = datetime.datetime.strptime(p["date"], "%Y-%m-%dT%H:%M:%SZ")
@@ -193,6 +193,7 @@ assert p["cpu_model"] and p["cpu_model"] != "unknown", p["cpu_model"]
 assert p["cores"] == cores and p["ranks"] == np and p["nodes"] == 1, p
 assert p["ranks_per_node_max"] == np, p
 assert p["oversubscribed"] is (np > cores), (np, cores, p["oversubscribed"])
+assert p["simulated"] is False, p["simulated"]
 assert p["cores_used"] == min(np, cores), (np, cores, p["cores_used"])
 version = re.search(r"project\(coloc VERSION ([0-9.]+)", open(src + "/CMakeLists.txt").read())
 assert p["coloc_version"] == version.group(1) == d["coloc_version"], p["coloc_version"]

@@ -89,6 +89,12 @@ def main():
     rep_b = json.load(open(os.path.join(sim, "report.json")))
     if rep_b["mpi"]["ranks"] != a.ranks:
         bad.append(f"report.json mpi.ranks {rep_b['mpi']['ranks']}")
+    prov = rep_b["provenance"]
+    if not (prov["simulated"] is True and prov["mpi_library"].startswith("SMPI")
+            and prov["oversubscribed"] is False and prov["cores_used"] == a.ranks):
+        bad.append(f"report.json provenance of the simulated run: {prov}")
+    if rep_a["provenance"]["simulated"] is not False:
+        bad.append("the serial reference says it is simulated")
     if rep_a["particles"]["count"] != rep_b["particles"]["count"]:
         bad.append("particle counts differ")
     for x, y in zip(rep_a["fluid"]["drag_force"], rep_b["fluid"]["drag_force"]):
