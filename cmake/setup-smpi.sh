@@ -33,8 +33,10 @@ if [[ ! -f $lib ]]; then
   echo "coloc setup-smpi: building hypre ${version:-?} with smpicc in $hypre"
   rm -rf "$hypre" && mkdir -p "$hypre/apt/lists/partial" "$hypre/src"
   suite=$(. /etc/os-release && echo "${VERSION_CODENAME:-bookworm}")
+  # The Debian archive apt already uses (a mirror ending in /debian; not -security, not a
+  # third-party repository), else deb.debian.org.
   mirror=$(grep -rhoE '^(URIs:|deb) *https?://[^ ]+' /etc/apt/sources.list.d/ /etc/apt/sources.list \
-             2>/dev/null | grep -v security | head -1 | sed -E 's/^(URIs:|deb) *//')
+             2>/dev/null | sed -E 's/^(URIs:|deb) *//' | grep -E '/debian/?$' | head -1 || true)
   cat > "$hypre/apt/src.sources" <<X
 Types: deb-src
 URIs: ${mirror:-http://deb.debian.org/debian}
@@ -44,8 +46,12 @@ Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
 X
   opts=(-o "Dir::Etc::sourcelist=$hypre/apt/src.sources" -o Dir::Etc::sourceparts=-
         -o "Dir::State::Lists=$hypre/apt/lists" -o Debug::NoDropPrivs=1)
-  (cd "$hypre/src" && apt-get "${opts[@]}" update -qq &&
-     apt-get "${opts[@]}" source --download-only hypre >/dev/null 2>&1)
+  if ! (cd "$hypre/src" && apt-get "${opts[@]}" update -qq &&
+          apt-get "${opts[@]}" source --download-only hypre >"$hypre/apt/source.log" 2>&1); then
+    cat "$hypre/apt/source.log" 2>/dev/null || true
+    echo "coloc setup-smpi: could not download Debian's hypre source from ${mirror:-deb.debian.org}" >&2
+    exit 1
+  fi
   tar xzf "$hypre"/src/hypre_*.orig.tar.gz -C "$hypre/src"
   cd "$hypre"/src/hypre-*/src
   # SMPI_PRETEND_CC: autoconf's test programs must run as ordinary programs while configuring.
