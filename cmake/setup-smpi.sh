@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # cmake/setup-smpi.sh [BUILD_DIR] [extra cmake args...] — the SimGrid SMPI build of coloc
-# (docs/smpi.md): installs SimGrid (Debian: libsimgrid-dev, simgrid) when missing, builds hypre
+# (docs/smpi.md): installs SimGrid (Debian: libsimgrid-dev) when missing, builds hypre
 # from Debian's own source package with smpicc once (BUILD_DIR/hypre, ~3 minutes on 2 cores),
 # then configures and builds coloc with -DCOLOC_SMPI=ON in BUILD_DIR (default: build-smpi).
 # Run it after cmake/setup.sh (which installs the other dependencies). Idempotent.
@@ -14,7 +14,7 @@ build=$(cd "$build" && pwd)
 sudo=""
 [[ $(id -u) -ne 0 ]] && sudo="sudo"
 missing=()
-for p in libsimgrid-dev simgrid; do
+for p in libsimgrid-dev; do  # smpicc, smpicxx, smpirun (it provides "simgrid")
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if ((${#missing[@]})); then
