@@ -17,6 +17,14 @@ foreach(lang C CXX)
     INTERFACE_LINK_LIBRARIES "${SIMGRID_LIBRARY}")
 endforeach()
 set(CMAKE_POSITION_INDEPENDENT_CODE ON)
+
+# coloc_smpi_program(target): an SMPI program is a shared object (its own sources -fPIC, not the
+# PIE of an executable) that smpirun's loader dlopens once per simulated rank; -z defs makes a
+# symbol missing from the libraries fail the link, not the first simulated run.
+function(coloc_smpi_program target)
+  target_compile_options(${target} PRIVATE -fPIC)
+  target_link_options(${target} PRIVATE -shared -Wl,-z,defs)
+endfunction()
 if(NOT HYPRE_LIBRARY OR NOT HYPRE_INCLUDE_DIR)
   message(FATAL_ERROR "COLOC_SMPI: give -DHYPRE_LIBRARY=<libHYPRE.a built with smpicc> and "
                       "-DHYPRE_INCLUDE_DIR=<its include/> (cmake/setup-smpi.sh builds both)")

@@ -1,18 +1,25 @@
 #include "coloc/core/comm.hpp"
 
 #include <cstdio>
-#include <string_view>
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
 
 namespace coloc {
 
-bool mpiIsSimulated() {
+std::string mpiLibraryVersion() {
   char version[MPI_MAX_LIBRARY_VERSION_STRING] = {};
   int len = 0;
   MPI_Get_library_version(version, &len);
-  return std::string_view(version, static_cast<std::size_t>(len)).starts_with("SMPI");
+  std::string text(version, static_cast<std::size_t>(len > 0 ? len : 0));
+  if (const auto nl = text.find('\n'); nl != std::string::npos) text.resize(nl);
+  while (!text.empty() && (text.back() == '\0' || text.back() == ' ' || text.back() == '\r'))
+    text.pop_back();
+  return text;
+}
+
+bool mpiIsSimulated() {
+  return mpiLibraryVersion().starts_with("SMPI");
 }
 
 MpiSession::MpiSession(int* argc, char*** argv) {

@@ -67,14 +67,7 @@ Json provenance(const Comm& comm, const std::string& commandLine) {
   char host[256] = "unknown";
   ::gethostname(host, sizeof host - 1);
   host[sizeof host - 1] = '\0';
-  char mpi[MPI_MAX_LIBRARY_VERSION_STRING] = "";
-  int len = 0;
-  MPI_Get_library_version(mpi, &len);
-  std::string mpiText(mpi, static_cast<std::size_t>(std::max(len, 0)));
-  while (!mpiText.empty() &&
-         (mpiText.back() == '\n' || mpiText.back() == '\0' || mpiText.back() == ' '))
-    mpiText.pop_back();
-  if (const auto nl = mpiText.find('\n'); nl != std::string::npos) mpiText.resize(nl);
+  const std::string mpiText = mpiLibraryVersion();
 
   Json p = Json::object();
   p["date"] = comm.broadcast(utcNow());

@@ -25,6 +25,9 @@ class MpiSession {
   MpiSession& operator=(const MpiSession&) = delete;
 };
 
+/// The first line of MPI_Get_library_version, trailing blanks removed (callable before MPI_Init).
+std::string mpiLibraryVersion();
+
 /// True under SimGrid's SMPI (a simulated cluster, docs/smpi.md): every rank is a thread of one
 /// process and time is simulated (wall-clock deadlines mean nothing there). Needs MPI_Init.
 bool mpiIsSimulated();
