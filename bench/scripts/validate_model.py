@@ -45,6 +45,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import dense_bed  # noqa: E402
 import model  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -104,14 +105,19 @@ def run_all(a, runs):
                             "--benchmark_format=json", "--benchmark_repetitions=%d" % a.repeats,
                             "--benchmark_out=" + os.path.join(runs, "pfmg-np%d.json" % n)],
                os.path.join(runs, "pfmg-np%d.log" % n))
+    base_sets = [x for kv in a.set for x in ("--set", kv)]
     for case in a.cases:
         name = os.path.splitext(os.path.basename(case))[0]
         d = os.path.join(runs, name)
         os.makedirs(d, exist_ok=True)
+        sets = base_sets
+        if a.dense_bed:  # the bed starts in contact (bench/scripts/dense_bed.py)
+            sets = sets + ["--set", dense_bed.set_argument(case, a.dense_bed)]
         sh([a.coloc, "plan", case, "--ranks", ",".join(str(P) for P in [1] + a.ranks),
             "--strategy", "uniform", "--out",
-            os.path.join(d, "plan")], os.path.join(d, "plan.log"))
+            os.path.join(d, "plan")] + sets, os.path.join(d, "plan.log"))
         extra = ["--set", "run.steps=%d" % (a.settled_steps + a.steps)] if a.steps else []
+        extra += sets
         if a.restart:  # every run continues from the same checkpoint (e.g. a settled bed)
             extra = ["--restart", os.path.abspath(a.restart)] + extra
         if a.timer_sync:  # the wait for the slowest rank booked to `sync` (fractions.wait)
@@ -126,7 +132,7 @@ def run_all(a, runs):
             for kind in ["np1", "np1corun"] + ["np%d" % P for P in a.ranks]:
                 out = os.path.join(d, "%s-%d" % (kind, i))
                 print("%s %s %d/%d  (%s)" % (name, kind, i + 1, a.repeats, uptime()), flush=True)
-                nr = 1 if kind.startswith("np1") else int(kind[2:])
+                nr = 1 if kind in ("np1", "np1corun") else int(kind[2:])
                 cmd = mpirun(nr) + [a.coloc, "run", case, "--overwrite", "--out", out] + extra
                 co = None
                 if kind == "np1corun" and a.corunner == "self":
@@ -346,6 +352,11 @@ def main():
                     "checkpoint, e.g. a settled bed (contact_bench.py --settle-only); needs "
                     "--steps (the timed steps) and --settled-steps (the checkpoint's step); one "
                     "case")
+    ap.add_argument("--set", action="append", default=[],
+                    help="KEY=VALUE for every run and the plan (repeatable)")
+    ap.add_argument("--dense-bed", type=float, nargs="?", const=0.01, default=0.0,
+                    metavar="OVERLAP", help="the bed starts dense and in contact, no restart "
+                    "needed (dense_bed.py; neighbours overlap by OVERLAP of a diameter)")
     ap.add_argument("--settled-steps", type=int, default=0,
                     help="with --restart: the step the checkpoint was written at")
     ap.add_argument("--stream-ranks", type=int, default=0, help="default: every core")
