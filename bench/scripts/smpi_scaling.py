@@ -19,6 +19,8 @@ import re
 import subprocess
 import sys
 
+import dense_bed
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHARES = ["fv", "dem", "coupling", "inter_physics", "wait"]
 
@@ -36,6 +38,8 @@ def run_one(a, strategy, ranks, folder):
             "--set", f"partition.strategy={strategy}", "--out", folder]
     for kv in a.set:
         cmd += ["--set", kv]
+    if a.dense_bed:
+        cmd += ["--set", dense_bed.set_argument(a.case, a.dense_bed)]
     out = subprocess.run(cmd, capture_output=True, text=True)
     sys.stdout.write(out.stdout)
     sys.stderr.write(out.stderr)
@@ -50,6 +54,8 @@ def run_one(a, strategy, ranks, folder):
            "simulation_wall_s": float(m.group(1)), "simulation_peak_mib": float(m.group(2))}
     for k in SHARES:
         row["share_" + k] = rep["fractions"].get(k, 0.0)
+    row["particles"] = rep.get("bed", {}).get("particles", "")
+    row["contacts_per_particle"] = rep.get("bed", {}).get("contacts_per_particle", "")
     return row
 
 
@@ -62,6 +68,9 @@ def main():
     ap.add_argument("--platform", default="paper")
     ap.add_argument("--steps", type=int, default=2)
     ap.add_argument("--set", action="append", default=[], help="KEY=VALUE for the case")
+    ap.add_argument("--dense-bed", type=float, nargs="?", const=0.01, default=0.0,
+                    metavar="OVERLAP", help="the bed starts dense and in contact (dense_bed.py; "
+                    "neighbours overlap by OVERLAP of a diameter, default 0.01)")
     ap.add_argument("--smpi-build", help="the SMPI build folder (default: smpi_run.py's)")
     ap.add_argument("--out", help="output folder (default: ./out/<case>-smpi-scaling)")
     a = ap.parse_args()
