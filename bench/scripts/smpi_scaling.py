@@ -10,6 +10,17 @@ SIMULATED time per step, speedup against the fewest ranks of the same strategy, 
 (fluid, DEM, coupling, inter-physics, wait) from report.json, and what each simulation cost (wall
 time, peak memory). Every time in them is simulated and contention-free (SMPI runs each rank's
 bursts alone on this machine's core); the figure says so in its title.
+
+--model R.json: beside each simulated point, bench/scripts/model.py's prediction for the same
+case, strategy, rank count and platform, with the same assumption (no memory contention, no
+noise): R.json is a 1-rank report.json of the real build (calibrated here) or a costs file
+(validate_model.py's validate-costs-CASE.json, `model.py calibrate`); the layouts come from
+`coloc plan` of the real build (--coloc). The platform's links give the model's network: latency
+two links (node, switch, node), bandwidth one link shared by the ranks of a node. The CSV gets
+model_step_s, model_error (model / simulated - 1) and the model's shares; the figure draws the
+model dashed. The paper's figures are drawn where it gives them (case 2 at 252 cores: 81 %
+fluid, 18 % DummyDEM, < 1 % inter-physics; case 3: > 92 % DEM, < 8 % fluid, < 0.1 %
+inter-physics; independent partitions after SediFoam: ~30 % inter-physics above 200 ranks).
 """
 import argparse
 import csv
@@ -20,9 +31,71 @@ import subprocess
 import sys
 
 import dense_bed
+import model
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHARES = ["fv", "dem", "coupling", "inter_physics", "wait"]
+
+
+# The paper's figures (Pozzetti et al.), % of the step: (case name prefix, ranks, share, value, how)
+PAPER = [("case2", 252, "fv", 81.0, "="), ("case2", 252, "dem", 18.0, "="),
+         ("case2", 252, "inter_physics", 1.0, "<"), ("case3", 280, "dem", 92.0, ">"),
+         ("case3", 280, "fv", 8.0, "<"), ("case3", 280, "inter_physics", 0.1, "<")]
+SEDIFOAM_INDEPENDENT = 30.0  # % inter-physics, independent partitions above 200 ranks
+UNITS = {"": 1.0, "k": 1e3, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12}
+TIME = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+
+
+def platform_profile(path):
+    """model.py's network profile from the platform's <cluster>: latency of two links, bandwidth
+    of one link (bytes/s) shared by the ranks of a node, no memory contention, no noise."""
+    text = open(path).read()
+    m = re.search(r"<cluster\b[^>]*>", text)
+    if not m:
+        sys.exit(f"smpi_scaling.py: {path} has no <cluster> element")
+    at = dict(re.findall(r'(\w+)="([^"]*)"', m.group(0)))
+    bw = re.fullmatch(r"([0-9.eE+-]+)\s*([kKMGT]?)(Bps|bps)", at["bw"])
+    lat = re.fullmatch(r"([0-9.eE+-]+)\s*(s|ms|us|ns)", at["lat"])
+    if not bw or not lat:
+        sys.exit(f"smpi_scaling.py: {path}: bw '{at['bw']}' or lat '{at['lat']}' not understood")
+    bps = float(bw.group(1)) * UNITS[bw.group(2)] / (8.0 if bw.group(3) == "bps" else 1.0)
+    return {"latency_s": 2 * float(lat.group(1)) * TIME[lat.group(2)], "bandwidth_Bps": bps,
+            "ranks_per_node": int(at.get("core", "1")), "memory_Bps": bps, "memory": None,
+            "noise": None, "name": os.path.basename(path) + " (contention-free)"}
+
+
+def model_points(a, strategies, ranks, out):
+    """{(strategy, ranks): model.py's prediction} for the simulated points."""
+    with open(a.model) as f:
+        src = json.load(f)
+    costs = model.calibrate(src, "avg") if "timers" in src else src
+    prof = platform_profile(smpi_platform(a.platform))
+    plan_dir = os.path.join(out, "plan")
+    cmd = [a.coloc, "plan", a.case, "--ranks", ",".join(str(p) for p in ranks), "--out", plan_dir]
+    for s in strategies:
+        cmd += ["--strategy", s]
+    for kv in case_sets(a):
+        cmd += ["--set", kv]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"smpi_scaling.py: coloc plan failed:\n{p.stdout}{p.stderr}")
+    with open(os.path.join(plan_dir, "plan.json")) as f:
+        plan = json.load(f)
+    return {(L["strategy"], L["ranks"]): model.predict_layout(costs, L, prof)
+            for L in plan["layouts"] if "error" not in L}, costs["source"], prof["name"]
+
+
+def smpi_platform(name):
+    sys.path.insert(0, HERE)
+    import smpi_run
+    return smpi_run.platform_file(name)
+
+
+def case_sets(a):
+    sets = list(a.set)
+    if a.dense_bed:
+        sets.append(dense_bed.set_argument(a.case, a.dense_bed))
+    return sets
 
 
 def case_name(path):
@@ -36,10 +109,8 @@ def run_one(a, strategy, ranks, folder):
         cmd += ["--smpi-build", a.smpi_build]
     cmd += ["--", "run", a.case, "--quiet", "--overwrite", "--set", f"run.steps={a.steps}",
             "--set", f"partition.strategy={strategy}", "--out", folder]
-    for kv in a.set:
+    for kv in case_sets(a):
         cmd += ["--set", kv]
-    if a.dense_bed:
-        cmd += ["--set", dense_bed.set_argument(a.case, a.dense_bed)]
     out = subprocess.run(cmd, capture_output=True, text=True)
     sys.stdout.write(out.stdout)
     sys.stderr.write(out.stderr)
@@ -73,6 +144,11 @@ def main():
                     "neighbours overlap by OVERLAP of a diameter, default 0.01)")
     ap.add_argument("--smpi-build", help="the SMPI build folder (default: smpi_run.py's)")
     ap.add_argument("--out", help="output folder (default: ./out/<case>-smpi-scaling)")
+    ap.add_argument("--model", help="a 1-rank report.json of the real build, or a costs JSON: "
+                    "model.py's prediction beside each point")
+    ap.add_argument("--coloc", default=os.path.join(os.path.dirname(os.path.dirname(HERE)),
+                                                    "build", "coloc"),
+                    help="the real build's coloc, for `coloc plan` (--model)")
     a = ap.parse_args()
     ranks = [int(r) for r in a.ranks.split(",")]
     strategies = [s for s in a.strategies.split(",") if s]
@@ -84,12 +160,29 @@ def main():
             rows.append(run_one(a, s, p, os.path.join(out, f"{s}-np{p}")))
             first = next(r for r in rows if r["strategy"] == s)
             rows[-1]["speedup"] = first["step_s_simulated"] / rows[-1]["step_s_simulated"] * first["ranks"]
+    mod, mod_src, mod_prof = (model_points(a, strategies, ranks, out) if a.model
+                              else ({}, None, None))
+    for r in rows:
+        m = mod.get((r["strategy"], r["ranks"]))
+        if m is None:
+            continue
+        first = next(x for x in rows if x["strategy"] == r["strategy"])
+        m0 = mod[(first["strategy"], first["ranks"])]
+        r["model_step_s"] = m["step_s"]
+        r["model_error"] = m["step_s"] / r["step_s_simulated"] - 1.0
+        r["model_speedup"] = m0["step_s"] / m["step_s"] * first["ranks"]
+        for k, mk in (("fv", "fluid"), ("dem", "dem"), ("coupling", "coupling"),
+                      ("inter_physics", "inter_physics"), ("wait", "wait")):
+            r["model_share_" + k] = m[mk]
     path = os.path.join(out, "smpi_scaling.csv")
     with open(path, "w", newline="") as f:
         f.write(f"# SIMULATED (SimGrid SMPI, platform {a.platform}, contention-free): "
                 f"{case_name(a.case)}, {a.steps} steps a run; speedup relative to the fewest "
-                f"ranks of each strategy, times that many ranks\n")
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+                f"ranks of each strategy, times that many ranks"
+                + (f"; MODEL columns: model.py, costs from {mod_src}, profile {mod_prof}"
+                   if mod else "") + "\n")
+        keys = [k for r in rows for k in r]
+        w = csv.DictWriter(f, fieldnames=list(dict.fromkeys(keys)), restval="")
         w.writeheader()
         w.writerows(rows)
     print(f"smpi_scaling.py: wrote {path}")
@@ -100,23 +193,47 @@ def main():
     except ImportError:
         print("smpi_scaling.py: no matplotlib, no figure")
         return 0
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for s in strategies:
+    fig, (ax1, ax2, ax3) = plt.subplots(1, 3, figsize=(15, 4.4))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, s in enumerate(strategies):
+        c = colors[i % len(colors)]
         rs = [r for r in rows if r["strategy"] == s]
-        ax1.plot([r["ranks"] for r in rs], [r["speedup"] for r in rs], "o-", label=s)
-        ax2.plot([r["ranks"] for r in rs], [100 * r["share_inter_physics"] for r in rs], "o-",
-                 label=s)
+        P = [r["ranks"] for r in rs]
+        ax1.plot(P, [r["speedup"] for r in rs], "o-", color=c, label=s + " (simulated)")
+        ax2.plot(P, [100 * r["share_inter_physics"] for r in rs], "o-", color=c, label=s)
+        ax3.plot(P, [100 * r["share_fv"] for r in rs], "o-", color=c, label=s + " fluid")
+        ax3.plot(P, [100 * r["share_dem"] for r in rs], "s-", color=c, alpha=0.6,
+                 label=s + " DEM")
+        rm = [r for r in rs if "model_step_s" in r]
+        if rm:
+            Pm = [r["ranks"] for r in rm]
+            ax1.plot(Pm, [r["model_speedup"] for r in rm], "x--", color=c, label=s + " (model)")
+            ax2.plot(Pm, [100 * r["model_share_inter_physics"] for r in rm], "x--", color=c)
+            ax3.plot(Pm, [100 * r["model_share_fv"] for r in rm], "x--", color=c)
+            ax3.plot(Pm, [100 * r["model_share_dem"] for r in rm], "x:", color=c)
     lo, hi = min(ranks), max(ranks)
     ax1.plot([lo, hi], [lo, hi], "k:", label="ideal")
-    ax1.set_xlabel("simulated MPI ranks")
-    ax1.set_ylabel("speedup (simulated time per step)")
-    ax2.set_xlabel("simulated MPI ranks")
+    name = case_name(a.case)
+    marks = {"fv": ax3, "dem": ax3, "inter_physics": ax2}
+    for prefix, P, share, v, how in PAPER:
+        if name.startswith(prefix):
+            marks[share].plot([P], [v], "k*", ms=10)
+            marks[share].annotate(f"paper {share.replace('fv', 'fluid')} {how} {v:g} %", (P, v),
+                                  fontsize=7, xytext=(4, 4), textcoords="offset points")
+    if "independent" in strategies and hi >= 200:
+        ax2.plot([200, max(hi, 280)], [SEDIFOAM_INDEPENDENT] * 2, "k--", lw=0.8,
+                 label="independent after SediFoam (~30 %)")
+    ax1.set_ylabel("speedup (time per step)")
     ax2.set_ylabel("inter-physics exchange, % of the step")
-    for ax in (ax1, ax2):
+    ax3.set_ylabel("fluid (o) and DEM (s), % of the step")
+    for ax in (ax1, ax2, ax3):
+        ax.set_xlabel("simulated MPI ranks")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle(f"SIMULATED (SimGrid SMPI, {a.platform} cluster, contention-free): "
-                 f"{case_name(a.case)}, {a.steps} steps", fontsize=10)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"SIMULATED (SimGrid SMPI, {a.platform} cluster, contention-free): {name}, "
+                 f"{a.steps} steps; solid: simulated"
+                 + (f", dashed: MODEL (model.py, same platform, costs from {mod_src})"
+                    if mod else "") + "; *: the paper", fontsize=9)
     fig.tight_layout()
     png = os.path.join(out, "smpi_scaling.png")
     fig.savefig(png, dpi=110)
