@@ -671,9 +671,13 @@ void Simulation::writeOutput(OutputWriter& out) {
   if (dem_ && out.options().particles) {
     const auto& p = dem_->particles();
     const std::size_t n = p.nOwned;
+    // The fluid's force as the DEM integrates it (f_ext, held over the sub-steps; zero without
+    // a fluid) and the material: the drag-force field CFD-DEM users look for in ParaView.
+    const ParticleExtraColumns extra{true, std::span<const int>(p.material.data(), n),
+                                     firstRows(p.fExt, n)};
     out.writeParticles(run_.steps, run_.time, std::span<const std::int64_t>(p.id.data(), n),
                        firstRows(p.x, n), firstRows(p.v, n), firstRows(p.omega, n),
-                       std::span<const double>(p.radius.data(), n));
+                       std::span<const double>(p.radius.data(), n), extra);
   }
 }
 

@@ -145,7 +145,8 @@ std::string OutputWriter::writeFields(long long step, double time,
 
 std::string OutputWriter::writeParticles(long long step, double time,
                                          std::span<const std::int64_t> id, Vec3Span x, Vec3Span v,
-                                         Vec3Span omega, std::span<const double> radius) {
+                                         Vec3Span omega, std::span<const double> radius,
+                                         const ParticleExtraColumns& extra) {
   if (!opt_.particles) return {};
   const Decomposition& dec = *dec_;
   const std::size_t n = id.size();
@@ -154,6 +155,11 @@ std::string OutputWriter::writeParticles(long long step, double time,
     for (const auto& c : *a)
       if (c.size() != n) err = "particle output: arrays of different lengths";
   if (radius.size() != n) err = "particle output: arrays of different lengths";
+  if (extra.write) {
+    if (extra.material.size() != n) err = "particle output: arrays of different lengths";
+    for (const auto& c : extra.fluidForce)
+      if (c.size() != n) err = "particle output: arrays of different lengths";
+  }
   dec.comm().raiseIfAny(err);
   ensureDir();
   const std::string name = fileName("particles", step);
@@ -176,6 +182,12 @@ std::string OutputWriter::writeParticles(long long step, double time,
     writeParticleVec3(file, "/v", v);
     writeParticleVec3(file, "/omega", omega);
     writeParticleArray(file, "/radius", radius);
+    if (extra.write) {
+      writeParticleArray(file, "/material", extra.material);
+      writeParticleVec3(file, "/fluid_force", extra.fluidForce);
+      file.setAttribute("/material", "units", "1");
+      file.setAttribute("/fluid_force", "units", "N");
+    }
     const std::vector<int> rank(n, dec.rank());
     writeParticleArray(file, "/rank", std::span<const int>(rank));
     // The global row index of each particle: the connectivity of N one-point cells.
@@ -200,6 +212,10 @@ std::string OutputWriter::writeParticles(long long step, double time,
                       {"omega", true, "/omega"},
                       {"radius", false, "/radius"},
                       {"rank", false, "/rank", "Int", 4}};
+  if (extra.write) {
+    entry.attributes.push_back({"material", false, "/material", "Int", 4});
+    entry.attributes.push_back({"fluid_force", true, "/fluid_force"});
+  }
   particleSeries_.add(std::move(entry));
   particleSeries_.write(dec.comm(), (std::filesystem::path(opt_.dir) / "particles.xmf").string());
   return path;

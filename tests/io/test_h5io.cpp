@@ -498,13 +498,18 @@ TEST(H5Io, OutputWriterSeries) {
   std::array<std::vector<double>, 3> x;
   for (auto& c : x) c.assign(static_cast<std::size_t>(n), 0.5);
   const std::vector<double> r(static_cast<std::size_t>(n), 0.01);
+  const std::vector<int> mat(static_cast<std::size_t>(n), 1 + w.rank());
+  std::array<std::vector<double>, 3> ff;
+  for (int d = 0; d < 3; ++d) ff[d].assign(static_cast<std::size_t>(n), 1e-6 * (d + 1));
   for (long long step : {0, 5}) {
     const auto fp = out.writeFields(
         step, 0.01 * static_cast<double>(step),
         {OutputField::scalar("p", p, "m^2/s^2"), OutputField::vector("u", u, "m/s")});
     EXPECT_EQ(fp, opt.dir + "/fields_00000" + std::to_string(step) + ".h5");
+    // the optional columns: material and the fluid's force (at step 5 only)
+    const ParticleExtraColumns extra{step == 5, mat, firstRows(ff, ids.size())};
     out.writeParticles(step, 0.01 * static_cast<double>(step), ids, firstRows(x, ids.size()),
-                       firstRows(x, ids.size()), firstRows(x, ids.size()), r);
+                       firstRows(x, ids.size()), firstRows(x, ids.size()), r, extra);
   }
   EXPECT_THROW(out.writeFields(6, 0.0, {OutputField::scalar("p", p), OutputField::scalar("p", p)}),
                Error);
@@ -534,6 +539,27 @@ TEST(H5Io, OutputWriterSeries) {
       EXPECT_EQ(vertex[i], rows.offset + static_cast<long long>(i));
     EXPECT_EQ(pf.attributeString("/v", "units"), "m/s");
     EXPECT_EQ(pf.attributeString("/x", "units"), "m");
+    // material and fluid_force, with their units, and ParaView sees them in the XDMF
+    const auto m = readParticleArray<int>(pf, "/material", rows);
+    ASSERT_EQ(m.size(), static_cast<std::size_t>(n));
+    for (int v : m) EXPECT_EQ(v, 1 + w.rank());
+    EXPECT_EQ(pf.attributeString("/fluid_force", "units"), "N");
+    EXPECT_EQ(pf.attributeString("/material", "units"), "1");
+    const auto f = readParticleVec3(pf, "/fluid_force", rows);
+    for (int d = 0; d < 3; ++d)
+      for (double v : f[d]) EXPECT_EQ(v, 1e-6 * (d + 1));
+  }
+  {
+    // step 0 was written without them: its file has no such datasets
+    H5File p0 = H5File::openRead(w, opt.dir + "/particles_000000.h5");
+    EXPECT_FALSE(p0.exists("/fluid_force"));
+    EXPECT_FALSE(p0.exists("/material"));
+  }
+  if (w.rank() == 0) {
+    std::ifstream xmf(opt.dir + "/particles.xmf");
+    const std::string text((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("Name=\"fluid_force\""), std::string::npos);
+    EXPECT_NE(text.find("Name=\"material\""), std::string::npos);
   }
   // disabled series write nothing
   OutputWriter off(dec, OutputOptions{0, false, false, scratch("never")});

@@ -64,6 +64,14 @@ struct OutputField {
   }
 };
 
+/// The optional columns of a particle file: written when `write` is true, which must be the same
+/// on every rank (the datasets are created collectively, and a rank may hold no particle).
+struct ParticleExtraColumns {
+  bool write = false;
+  std::span<const int> material;  ///< material index of each particle (`particles.materials`)
+  Vec3Span fluidForce;            ///< the fluid's force on each particle (N), as the DEM used it
+};
+
 /// Writes the output series of a run. Collective calls (every rank of the decomposition); the
 /// decomposition must outlive the writer.
 class OutputWriter {
@@ -86,9 +94,11 @@ class OutputWriter {
   /// DIR/particles_NNNNNN.h5 with the owning rank and the vertex list (/vertex: the row index,
   /// the XDMF topology's connectivity), and rewrites DIR/particles.xmf; returns the
   /// .h5 path. Does nothing (returns "") when options().particles is false.
+  /// With `extra.write` (the same on every rank), also /material and /fluid_force.
   std::string writeParticles(long long step, double time, std::span<const std::int64_t> id,
                              Vec3Span x, Vec3Span v, Vec3Span omega,
-                             std::span<const double> radius);
+                             std::span<const double> radius,
+                             const ParticleExtraColumns& extra = {});
 
   const XdmfSeries& fieldSeries() const { return fieldSeries_; }
   const XdmfSeries& particleSeries() const { return particleSeries_; }
