@@ -96,8 +96,7 @@ class OutputWriter {
   /// .h5 path. Does nothing (returns "") when options().particles is false.
   /// With `extra.write` (the same on every rank), also /material and /fluid_force.
   std::string writeParticles(long long step, double time, std::span<const std::int64_t> id,
-                             Vec3Span x, Vec3Span v, Vec3Span omega,
-                             std::span<const double> radius,
+                             Vec3Span x, Vec3Span v, Vec3Span omega, std::span<const double> radius,
                              const ParticleExtraColumns& extra = {});
 
   const XdmfSeries& fieldSeries() const { return fieldSeries_; }
