@@ -5,7 +5,10 @@
 
 Left: the fluid fraction eps on the mid-plane that contains the vertical (gravity) axis; right:
 the fluid speed |u| (m/s) on the same plane. The particles whose centres lie within one cell of
-the plane are drawn on both, to scale (their true radius), coloured by their speed on the right.
+the plane are drawn on both, to scale (their true radius), coloured by the rank that owns them on
+the left and by their speed on the right. The blocks of the partition (report.json
+partition.boxes: the fluid's block of every rank, process grid or tiled boxes) that the plane
+cuts are drawn on both as white lines, numbered by rank up to 64 ranks.
 Reads the files of docs/output.md with h5py (fields_NNNNNN.h5, particles_NNNNNN.h5) and the
 case's gravity from report.json when it is there (else: the longest axis is vertical). The coloc
 driver runs this at the end of a run that writes fields (key output.snapshot). Exit status 0
@@ -41,6 +44,17 @@ def vertical_axis(report, length):
     return max(range(3), key=lambda d: length[d]), 1
 
 
+def partition_boxes(report):
+    """(strategy, the fluid's blocks [lo x, y, z, hi x, y, z] in cells) from report.json, or
+    (None, []) when it has none (an older report)."""
+    try:
+        with open(report) as f:
+            part = json.load(f)["partition"]
+        return part.get("strategy"), part.get("boxes") or []
+    except (OSError, KeyError, ValueError, TypeError):
+        return None, []
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out_dir")
@@ -73,7 +87,9 @@ def main():
         eps = f["eps"][...] if "eps" in f else None      # [nz][ny][nx]
         u = f["u"][...] if "u" in f else None            # [nz][ny][nx][3]
     length = spacing * cells
-    up, sign = vertical_axis(args.report or os.path.join(args.out_dir, "report.json"), length)
+    report = args.report or os.path.join(args.out_dir, "report.json")
+    up, sign = vertical_axis(report, length)
+    strategy, boxes = partition_boxes(report)
     # The in-plane horizontal axis: the longer of the other two; the plane is normal to the third.
     others = [d for d in range(3) if d != up]
     horiz = max(others, key=lambda d: length[d])
@@ -99,9 +115,10 @@ def main():
     if os.path.exists(ppath):
         with h5py.File(ppath, "r") as f:
             x, v, r = f["x"][...], f["v"][...], f["radius"][...]
+            rank = f["rank"][...] if "rank" in f else np.zeros(len(x), dtype=int)
         near = np.abs(x[:, normal] - (origin[normal] + (mid + 0.5) * spacing[normal])) \
             <= spacing[normal]
-        px, pv, pr = x[near], np.linalg.norm(v[near], axis=1), r[near]
+        px, pv, pr, prank = x[near], np.linalg.norm(v[near], axis=1), r[near], rank[near]
         ntotal = len(x)
 
     ext = [origin[horiz], origin[horiz] + length[horiz], origin[up], origin[up] + length[up]]
@@ -116,18 +133,32 @@ def main():
         fig.colorbar(im, ax=ax, orientation="horizontal", shrink=0.9, pad=0.02, label=title)
         if px is not None and len(px):
             speed_panel = title.startswith("fluid speed")
+            nranks = max(len(boxes), int(prank.max()) + 1 if len(prank) else 1)
+            by_rank = plt.get_cmap("tab20")(prank % 20) if nranks > 1 else "white"
             ec = EllipseCollection(2 * pr, 2 * pr, np.zeros_like(pr), units="xy",
                                    offsets=np.column_stack([px[:, horiz], px[:, up]]),
                                    offset_transform=ax.transData,
                                    facecolors="none" if not speed_panel else None,
-                                   edgecolors="white" if not speed_panel else "black",
-                                   linewidths=0.3)
+                                   edgecolors=by_rank if not speed_panel else "black",
+                                   linewidths=0.3 if speed_panel or nranks == 1 else 0.8)
             if speed_panel:
                 ec.set_array(pv)
                 ec.set_cmap("cool")
                 fig.colorbar(ec, ax=ax, orientation="horizontal", shrink=0.9, pad=0.02,
                              label="particle speed |v| (m/s)")
             ax.add_collection(ec)
+        for q, b in enumerate(boxes):  # the blocks the plane cuts
+            if not b[normal] <= mid < b[3 + normal]:
+                continue
+            x0 = origin[horiz] + b[horiz] * spacing[horiz]
+            y0 = origin[up] + b[up] * spacing[up]
+            wdt = (b[3 + horiz] - b[horiz]) * spacing[horiz]
+            hgt = (b[3 + up] - b[up]) * spacing[up]
+            ax.add_patch(plt.Rectangle((x0, y0), wdt, hgt, fill=False, ec="white", lw=0.8,
+                                       ls="--", alpha=0.9))
+            if len(boxes) <= 64:
+                ax.text(x0 + wdt / 2, y0 + hgt / 2, str(q), color="white", fontsize=7,
+                        ha="center", va="center", alpha=0.9)
         ax.set_xlabel("%s (m)" % names[horiz])
         ax.tick_params(axis="x", labelrotation=30)
         ax.set_ylabel("%s (m), %s" % (names[up], "up" if sign > 0 else "down"))
@@ -137,6 +168,10 @@ def main():
                                             origin[normal] + (mid + 0.5) * spacing[normal], mid)
     if px is not None:
         sub += "; %d of %d particles within one cell of it, drawn to scale" % (len(px), ntotal)
+    if len(boxes) > 1:
+        sub += "\ndashed: the fluid's blocks of %d ranks (%s)%s" % (
+            len(boxes), strategy, "; particles coloured by their rank (left)" if px is not None
+            else "")
     fig.suptitle("%s: step %d, t = %.6g s\n%s" % (case, step, time, sub), fontsize=10)
     png = args.png or os.path.join(args.out_dir, "snapshot.png")
     fig.savefig(png, dpi=110)

@@ -717,14 +717,20 @@ Json Simulation::report(double wallSeconds) const {
   out["partition"] = {{"strategy", layouts_.strategy},
                       {"fluid_dims", dimsJson(dec_)},
                       {"particle_dims", dimsJson(particleDecomposition())}};
-  if (dec_.isTiled()) {  // [lo x, y, z, hi x, y, z] a rank, as plan.json writes them
+  // Every rank's block, [lo x, y, z, hi x, y, z) in global cells as plan.json writes them (the
+  // tiled boxes, or the process grid's blocks): what snapshot.py draws. Independent partitions
+  // also give the particles' blocks.
+  const auto boxesJson = [](const Decomposition& d) {
     std::vector<Int3> lo, hi;
-    dec_.boxes(lo, hi);
+    d.boxes(lo, hi);
     Json boxes = Json::array();
     for (std::size_t r = 0; r < lo.size(); ++r)
       boxes.push_back(Json::array({lo[r][0], lo[r][1], lo[r][2], hi[r][0], hi[r][1], hi[r][2]}));
-    out["partition"]["boxes"] = boxes;
-  }
+    return boxes;
+  };
+  out["partition"]["boxes"] = boxesJson(dec_);
+  if (&particleDecomposition() != &dec_)
+    out["partition"]["particle_boxes"] = boxesJson(particleDecomposition());
   if (layouts_.strategy == "balanced" || layouts_.strategy == "tiled")
     out["partition"][layouts_.strategy] = {
         {"cost_per_cell", layouts_.model.perCell},

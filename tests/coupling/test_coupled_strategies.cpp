@@ -119,9 +119,18 @@ TEST_P(Strategy, SameTrajectoriesAsSerial) {
     } else {
       EXPECT_FALSE(par.independent());
     }
+    // every strategy reports every rank's block; they tile the grid (cells add up)
+    ASSERT_EQ(r["partition"]["boxes"].size(), static_cast<std::size_t>(world.size()));
+    long long cells = 0;
+    for (const auto& b : r["partition"]["boxes"])
+      cells += (b[3].get<long long>() - b[0].get<long long>()) *
+               (b[4].get<long long>() - b[1].get<long long>()) *
+               (b[5].get<long long>() - b[2].get<long long>());
+    const auto& g = par.decomposition().grid();
+    EXPECT_EQ(cells, static_cast<long long>(g.cells[0]) * g.cells[1] * g.cells[2]);
+    EXPECT_EQ(r["partition"].contains("particle_boxes"), par.independent());
     if (P.strategy == "tiled") {
       EXPECT_TRUE(par.decomposition().isTiled());
-      EXPECT_EQ(r["partition"]["boxes"].size(), static_cast<std::size_t>(world.size()));
       EXPECT_TRUE(r["partition"]["fluid_dims"].is_null());
     }
   }
