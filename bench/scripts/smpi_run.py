@@ -42,13 +42,18 @@ def platform_file(name):
     return path
 
 
-def cluster_shape(path):
-    """(prefix, first node, last node, cores a node) of the platform's <cluster>."""
+def cluster_attributes(path):
+    """The attributes of the platform's <cluster> element, as strings."""
     text = open(path).read()
     m = re.search(r"<cluster\b[^>]*>", text)
     if not m:
         sys.exit(f"smpi_run.py: {path} has no <cluster> element")
-    attrs = dict(re.findall(r'(\w+)="([^"]*)"', m.group(0)))
+    return dict(re.findall(r'(\w+)="([^"]*)"', m.group(0)))
+
+
+def cluster_shape(path):
+    """(prefix, first node, last node, cores a node) of the platform's <cluster>."""
+    attrs = cluster_attributes(path)
     lo, hi = (int(v) for v in attrs["radical"].split("-"))
     return attrs.get("prefix", ""), lo, hi, int(attrs.get("core", "1")), attrs.get("suffix", "")
 

@@ -32,6 +32,7 @@ import sys
 
 import dense_bed
 import model
+import smpi_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHARES = ["fv", "dem", "coupling", "inter_physics", "wait"]
@@ -49,11 +50,7 @@ TIME = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 def platform_profile(path):
     """model.py's network profile from the platform's <cluster>: latency of two links, bandwidth
     of one link (bytes/s) shared by the ranks of a node, no memory contention, no noise."""
-    text = open(path).read()
-    m = re.search(r"<cluster\b[^>]*>", text)
-    if not m:
-        sys.exit(f"smpi_scaling.py: {path} has no <cluster> element")
-    at = dict(re.findall(r'(\w+)="([^"]*)"', m.group(0)))
+    at = smpi_run.cluster_attributes(path)
     bw = re.fullmatch(r"([0-9.eE+-]+)\s*([kKMGT]?)(Bps|bps)", at["bw"])
     lat = re.fullmatch(r"([0-9.eE+-]+)\s*(s|ms|us|ns)", at["lat"])
     if not bw or not lat:
@@ -69,7 +66,7 @@ def model_points(a, strategies, ranks, out):
     with open(a.model) as f:
         src = json.load(f)
     costs = model.calibrate(src, "avg") if "timers" in src else src
-    prof = platform_profile(smpi_platform(a.platform))
+    prof = platform_profile(smpi_run.platform_file(a.platform))
     plan_dir = os.path.join(out, "plan")
     cmd = [a.coloc, "plan", a.case, "--ranks", ",".join(str(p) for p in ranks), "--out", plan_dir]
     for s in strategies:
@@ -83,12 +80,6 @@ def model_points(a, strategies, ranks, out):
         plan = json.load(f)
     return {(L["strategy"], L["ranks"]): model.predict_layout(costs, L, prof)
             for L in plan["layouts"] if "error" not in L}, costs["source"], prof["name"]
-
-
-def smpi_platform(name):
-    sys.path.insert(0, HERE)
-    import smpi_run
-    return smpi_run.platform_file(name)
 
 
 def case_sets(a):
