@@ -10,6 +10,7 @@
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/error.hpp"
+#include "coloc/core/provenance.hpp"
 #include "coloc/core/run_config.hpp"
 #include "coloc/coupling/case_checks.hpp"
 #include "coloc/coupling/simulation.hpp"
@@ -17,6 +18,7 @@
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/setup.hpp"
 #include "coloc/partition/strategy.hpp"
+#include "layout_svg.hpp"
 #include "run.hpp"
 
 namespace coloc {
@@ -29,7 +31,8 @@ struct Plan {
   std::vector<IndexBox> fluid, particles;
   std::string fluidShape, particleShape;  // "2x1x3" (a process grid) or "7 boxes" (tiled)
   std::array<std::vector<int>, 3> fluidCuts, particleCuts;  // process grids only (--verbose)
-  std::string error;  // the strategy cannot lay out this case on N ranks
+  std::string error;     // the strategy cannot lay out this case on N ranks
+  double imbalance = 0;  // largest / mean block cost (the table's)
 };
 
 std::vector<IndexBox> boxesOf(const Blocks& b) {
@@ -78,6 +81,43 @@ std::string minMax(const std::vector<T>& v) {
   if (v.empty()) return "-";
   const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
   return g6(static_cast<double>(*lo)) + " .. " + g6(static_cast<double>(*hi));
+}
+
+/// --draw: every strategy's layout in one SVG, with the command and where it was drawn.
+void drawLayouts(const CheckOptions& opts, const Config& cfg, const GlobalGrid& g,
+                 const std::vector<double>& particlesPerCell, const std::vector<Plan>& plans,
+                 const std::string& chosen) {
+  std::vector<LayoutDrawing> panels;
+  for (const Plan& p : plans) {
+    LayoutDrawing d;
+    d.strategy = p.strategy;
+    d.chosen = p.strategy == chosen;
+    if (!p.error.empty()) {
+      d.summary = "cannot lay out this case: " + p.error;
+    } else {
+      d.fluid = p.fluid;
+      d.particles = p.particles;
+      char s[200];
+      if (p.fluidShape == p.particleShape)
+        std::snprintf(s, sizeof s, "%s, imbalance %.3f", p.fluidShape.c_str(), p.imbalance);
+      else
+        std::snprintf(s, sizeof s, "fluid %s, particles %s, imbalance %.3f", p.fluidShape.c_str(),
+                      p.particleShape.c_str(), p.imbalance);
+      d.summary = s;
+    }
+    panels.push_back(std::move(d));
+  }
+  const Json prov = provenance(Comm(MPI_COMM_SELF), opts.commandLine);
+  const std::string dirty =
+      prov["git_dirty"].is_boolean() && prov["git_dirty"].get<bool>() ? ", dirty" : "";
+  const std::string caption = "coloc " + prov["coloc_version"].get<std::string>() + " (" +
+                              prov["git_commit"].get<std::string>().substr(0, 12) + dirty +
+                              "): " + opts.commandLine + "  |  " + prov["date"].get<std::string>() +
+                              ", " + prov["host"].get<std::string>() + " (" +
+                              prov["cpu_model"].get<std::string>() + ")";
+  writeLayoutSvg(opts.drawPath, g, layoutPlane(g, cfg.vec3("gravity")), particlesPerCell, panels,
+                 caption);
+  std::printf("coloc check: drew the layouts in %s\n", opts.drawPath.c_str());
 }
 
 }  // namespace
@@ -203,7 +243,7 @@ int checkCase(const CheckOptions& opts) {
   std::printf("\n  %-12s %-9s %-9s %-20s %-20s %-10s %s\n", "strategy", "fluid", "DEM",
               "cells/rank", "particles/rank", "imbalance", "memory/rank (max)");
   double caseMem = 0;
-  for (const Plan& p : plans) {
+  for (Plan& p : plans) {
     const bool chosen = p.strategy == strategy;
     if (!p.error.empty()) {
       std::printf("%s %-12s cannot lay out this case: %s\n", chosen ? "*" : " ", p.strategy.c_str(),
@@ -223,6 +263,7 @@ int checkCase(const CheckOptions& opts) {
                                                  parts[static_cast<std::size_t>(r)])
                             .total());
     if (chosen) caseMem = mem;
+    p.imbalance = imb;
     std::printf("%s %-12s %-9s %-9s %-20s %-20s %-10.3f %s\n", chosen ? "*" : " ",
                 p.strategy.c_str(), p.fluidShape.c_str(), p.particleShape.c_str(),
                 minMax(cells).c_str(), minMax(parts).c_str(), imb,
@@ -247,6 +288,7 @@ int checkCase(const CheckOptions& opts) {
       "coloc check: memory of the busiest rank of the case's layout (its particles, "
       "its block): %s\n",
       coupling::bytesText(caseMem).c_str());
+  if (!opts.drawPath.empty()) drawLayouts(opts, cfg, g, particlesPerCell, plans, strategy);
 
   // Time-step limits.
   const auto& mats = cfg.at("particles.materials");

@@ -9,8 +9,10 @@ namespace coloc {
 struct CheckOptions {
   std::string casePath;
   std::vector<std::string> overrides;
-  int ranks = 1;         // the rank count to lay the case out for
-  bool verbose = false;  // --cuts: print every strategy's cuts
+  int ranks = 1;            // the rank count to lay the case out for
+  bool verbose = false;     // --cuts: print every strategy's cuts
+  std::string drawPath;     // --draw FILE.svg: the layouts drawn (layout_svg.hpp)
+  std::string commandLine;  // for the picture's provenance line
 };
 
 /// Validate the case and print, for `ranks` ranks, the layout each partition strategy would

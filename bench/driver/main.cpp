@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
   keys->add_option("prefix", keysPrefix,
                    "only the keys under this path, e.g. particles.sources or fluid.dt");
   coloc::CheckOptions check;
+  check.commandLine = opts.commandLine;
   auto* checkCmd = app.add_subcommand(
       "check",
       "validate a case and print the layout each partition strategy would choose for N "
@@ -79,6 +80,9 @@ int main(int argc, char** argv) {
       ->take_all()
       ->allow_extra_args(false);
   checkCmd->add_flag("--cuts", check.verbose, "print every strategy's cuts");
+  checkCmd->add_option("--draw", check.drawPath,
+                       "also draw every strategy's layout on the vertical mid-plane (an SVG file: "
+                       "blocks numbered by rank over the particles a cell)");
   coloc::PlanOptions planOpts;
   auto* plan = app.add_subcommand(
       "plan",

@@ -26,6 +26,10 @@
 #                  and the modelled imbalance that a 2-rank run then reports, for the uniform and
 #                  the balanced strategy; exit 2 for a bad case and for a case too large for the
 #                  machine (run refused the same way); `coloc keys PREFIX`
+#   draw NP S      `coloc check --ranks NP --draw` with strategy S: an SVG whose four panels each
+#                  tile the drawn plane with NP ranks' blocks, and whose panel S shows the boxes
+#                  (and, independent, the particle boxes) a NP-rank run of S reports, cut by the
+#                  plane; a file that cannot be written is an error naming it
 set -u
 test=$1 coloc=$2 mpiexec=$3 py=$4 case=$5 work=$6
 shift 6
@@ -263,6 +267,59 @@ EOF2
     "$coloc" keys particles.sources > "$work/keys.txt" || fail "keys particles.sources"
     grep -q "particles.sources{type=random}.count" "$work/keys.txt" || fail "keys: no count"
     grep -q "fluid.nu" "$work/keys.txt" && fail "keys particles.sources lists fluid keys"
+    ;;
+  draw)
+    np=$1 st=$2
+    timeout 60 "$coloc" check "$case" --ranks "$np" --set partition.strategy=$st \
+      --draw "$work/layouts.svg" > "$work/check.txt" 2>&1 || { cat "$work/check.txt"; fail "coloc check --draw"; }
+    grep -q "drew the layouts in $work/layouts.svg" "$work/check.txt" || fail "no line naming the picture"
+    [[ -e $work/layouts.svg.tmp ]] && fail "a temporary file left"
+    run "$np" "$work/r" --set run.steps=1 --set partition.strategy=$st || { cat "$work/r.log"; fail "run failed"; }
+    "$py" - "$work/layouts.svg" "$work/r/report.json" "$np" "$st" <<'EOF2' || fail "the picture is not the run's layout"
+import json, sys
+import xml.etree.ElementTree as ET
+svg, rep, np_, st = ET.parse(sys.argv[1]).getroot(), json.load(open(sys.argv[2])), int(sys.argv[3]), sys.argv[4]
+ns = {"s": "http://www.w3.org/2000/svg"}
+cells = rep["config"]["domain"]["cells"]
+up, across, normal = 2, 0, 1  # gravity -z; x and y equal: the first of the others across
+mid = cells[normal] // 2
+panels = {g.get("data-strategy"): g for g in svg.iter("{http://www.w3.org/2000/svg}g") if g.get("class") == "panel"}
+assert sorted(panels) == ["balanced", "independent", "tiled", "uniform"], sorted(panels)
+def rects(g, cls):
+    out = []
+    for r in g.findall("s:rect", ns):
+        if r.get("class") == cls:
+            lo = [int(v) for v in r.get("data-lo", "0 0").split()] if r.get("data-lo") else None
+            hi = [int(v) for v in r.get("data-hi").split()] if r.get("data-hi") else None
+            out.append((int(r.get("data-rank")), lo, hi))
+    return out
+for name, g in panels.items():
+    assert int(g.get("data-ranks")) == np_, (name, g.get("data-ranks"))
+    blocks = rects(g, "block")
+    area = sum((h[0] - l[0]) * (h[1] - l[1]) for _, l, h in blocks)
+    assert area == cells[across] * cells[up], (name, area, blocks)
+    for a in range(len(blocks)):
+        for b in range(a + 1, len(blocks)):
+            (_, l1, h1), (_, l2, h2) = blocks[a], blocks[b]
+            assert not (l1[0] < h2[0] and l2[0] < h1[0] and l1[1] < h2[1] and l2[1] < h1[1]), (name, blocks[a], blocks[b])
+    assert len({r for r, _, _ in blocks}) == len(blocks), (name, "a rank drawn twice")
+# The run's own boxes, cut by the plane, are what panel st shows.
+def cut(boxes):
+    return sorted((r, [b[across], b[up]], [b[3 + across], b[3 + up]])
+                  for r, b in enumerate(boxes) if b[normal] <= mid < b[3 + normal])
+part = rep["partition"]
+drawn = sorted(rects(panels[st], "block"))
+print("drawn:", drawn)
+assert drawn == cut(part["boxes"]), (drawn, cut(part["boxes"]))
+if st == "independent":
+    dem = sorted((r, None, None) for r, _, _ in cut(part["particle_boxes"])
+                 if part["particle_boxes"][r] != part["boxes"][r])
+    assert sorted(rects(panels[st], "dem-block")) == dem, (rects(panels[st], "dem-block"), dem)
+    assert dem, "no particle box of its own drawn"
+print("the picture holds the run's layout:", st, np_)
+EOF2
+    "$expect" "cannot create '$work/no/such/dir/x.svg.tmp'" -- "$coloc" check "$case" --ranks "$np" \
+      --draw "$work/no/such/dir/x.svg" || fail "an unwritable picture"
     ;;
   *) fail "unknown test $test" ;;
 esac
