@@ -9,6 +9,11 @@ reader) at time T (default: the last output) and writes, to D (default OUT_DIR):
   render_speed.png      the fluid speed |u| (m/s) on that plane
   render_particles.png  the particles as spheres of their true radius coloured by |v| (m/s), in
                         front of the eps plane
+  render_ranks.png      the partition, seen obliquely: every rank's fluid block (report.json
+                        partition.boxes: process-grid blocks or tiled boxes) as an outline in the
+                        rank's colour, the particles coloured by the rank that owns them (the
+                        particle files' `rank`), independent partitions' particle boxes in thin
+                        black; the colours are matplotlib's tab20 by rank, as snapshot.png's
 
 The vertical axis is the case's gravity (report.json), else the longest axis. An output without
 particles (none inserted yet, or all gone) gives the particle picture of the eps plane alone.
@@ -44,7 +49,7 @@ if needs_x_display():
           "(Debian: apt-get install xvfb), or set DISPLAY", file=sys.stderr)
     sys.exit(2)
 
-from paraview.simple import (ColorBy, CreateView, Delete, GetColorTransferFunction,  # noqa: E402
+from paraview.simple import (Box, ColorBy, CreateView, Delete, GetColorTransferFunction,  # noqa: E402
                              GetScalarBar, OpenDataFile, Render, ResetCamera, SaveScreenshot,
                              Show, Slice, Text)
 
@@ -67,6 +72,7 @@ def main():
     ap.add_argument("--time", type=float, help="simulated time (s); default: the last output")
     ap.add_argument("--png-dir", help="folder of the PNGs (default: OUT_DIR)")
     ap.add_argument("--size", type=int, nargs=2, default=[900, 900], help="pixels (width height)")
+    ap.add_argument("--no-ranks", action="store_true", help="skip render_ranks.png")
     args = ap.parse_args()
     out = os.path.abspath(args.out_dir)
     png_dir = os.path.abspath(args.png_dir or out)
@@ -207,9 +213,112 @@ def main():
         SaveScreenshot(f, v, ImageResolution=args.size)
         written.append(f)
         Delete(v)
+    report = os.path.join(out, "report.json")
+    if not args.no_ranks and os.path.exists(report):
+        f = os.path.join(png_dir, "render_ranks.png")
+        if draw_ranks(report, parts, nparts, t, stamp, args.size, view, title, f):
+            written.append(f)
     for f in written:
         print("render.py: wrote %s" % f)
     return 0
+
+
+# matplotlib's tab20 (snapshot.py and coloc check --draw colour rank r with entry r % 20)
+TAB20 = ["#1f77b4", "#aec7e8", "#ff7f0e", "#ffbb78", "#2ca02c", "#98df8a", "#d62728", "#ff9896",
+         "#9467bd", "#c5b0d5", "#8c564b", "#c49c94", "#e377c2", "#f7b6d2", "#7f7f7f", "#c7c7c7",
+         "#bcbd22", "#dbdb8d", "#17becf", "#9edae5"]
+
+
+def rgb(hexcolour):
+    return [int(hexcolour[i:i + 2], 16) / 255.0 for i in (1, 3, 5)]
+
+
+def draw_ranks(report, parts, nparts, t, stamp, size, view, title, png):
+    """render_ranks.png: the blocks of report.json's partition.boxes as outlines in their rank's
+    colour, the particles coloured by their rank. False (with a message) when the report has no
+    boxes (a report from before they were written)."""
+    with open(report) as f:
+        rep = json.load(f)
+    part = rep.get("partition", {})
+    boxes = part.get("boxes")
+    if not boxes:
+        print("render.py: %s has no partition.boxes: no render_ranks.png" % report, file=sys.stderr)
+        return False
+    dom = rep["config"]["domain"]
+    origin, length, cells = dom.get("origin", [0, 0, 0]), dom["length"], dom["cells"]
+    h = [length[d] / cells[d] for d in range(3)]
+
+    def phys(b):
+        lo = [origin[d] + b[d] * h[d] for d in range(3)]
+        hi = [origin[d] + b[3 + d] * h[d] for d in range(3)]
+        return lo, hi
+
+    up, sign = vertical_axis(report, length)
+    v = view()
+    shown = []
+    for r, b in enumerate(boxes):
+        lo, hi = phys(b)
+        box = Box(XLength=hi[0] - lo[0], YLength=hi[1] - lo[1], ZLength=hi[2] - lo[2],
+                  Center=[0.5 * (lo[d] + hi[d]) for d in range(3)])
+        d = Show(box, v)
+        d.SetRepresentationType("Outline")
+        d.AmbientColor = d.DiffuseColor = rgb(TAB20[r % 20])
+        d.LineWidth = 3.0
+        shown.append(box)
+    dem = part.get("particle_boxes") or []
+    for r, b in enumerate(dem):
+        if r < len(boxes) and b == boxes[r]:
+            continue
+        lo, hi = phys(b)
+        box = Box(XLength=hi[0] - lo[0], YLength=hi[1] - lo[1], ZLength=hi[2] - lo[2],
+                  Center=[0.5 * (lo[d] + hi[d]) for d in range(3)])
+        d = Show(box, v)
+        d.SetRepresentationType("Outline")
+        d.AmbientColor = d.DiffuseColor = [0, 0, 0]
+        d.LineWidth = 1.0
+    if parts is not None and nparts > 0:
+        pd = Show(parts, v)
+        pd.SetRepresentationType("Point Gaussian")
+        pd.ScaleByArray = 1
+        pd.SetScaleArray = ["POINTS", "radius"]
+        pd.UseScaleFunction = 0
+        pd.GaussianRadius = 1.0
+        pd.ShaderPreset = "Sphere"
+        ColorBy(pd, ("POINTS", "rank"))
+        lut = GetColorTransferFunction("rank")
+        lut.InterpretValuesAsCategories = 1
+        annotations, colours = [], []
+        for r in range(len(boxes)):
+            annotations += [str(r), "rank %d" % r]
+            colours += rgb(TAB20[r % 20])
+        lut.Annotations = annotations
+        lut.IndexedColors = colours
+        if len(boxes) <= 20:  # a legend of the ranks' colours
+            sb = GetScalarBar(lut, v)
+            sb.Title = "rank"
+            sb.ComponentTitle = ""
+            sb.TitleColor = [0, 0, 0]
+            sb.LabelColor = [0, 0, 0]
+            sb.WindowLocation = "Lower Right Corner"
+            sb.Visibility = 1
+    what = "%s, %d ranks" % (part.get("strategy", "?"), len(boxes))
+    title(v, "the partition (%s): blocks outlined, particles coloured by rank (%s)" % (what, stamp))
+    # An oblique view: the vertical axis up, the camera off every axis.
+    centre = [origin[d] + 0.5 * length[d] for d in range(3)]
+    others = [d for d in range(3) if d != up]
+    pos = list(centre)
+    far = 3.0 * max(length)
+    pos[others[0]] += 0.8 * far
+    pos[others[1]] -= 1.0 * far
+    pos[up] += sign * 0.6 * far
+    v.CameraPosition = pos
+    v.CameraFocalPoint = centre
+    v.CameraViewUp = [float(sign) if d == up else 0.0 for d in range(3)]
+    ResetCamera(v)
+    Render(v)
+    SaveScreenshot(png, v, ImageResolution=size)
+    Delete(v)
+    return True
 
 
 if __name__ == "__main__":

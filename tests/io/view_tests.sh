@@ -11,8 +11,9 @@
 #                fails with a message on a folder without output
 #   paraview     with ParaView's default reader (OpenDataFile) particles.xmf gives N points AND N
 #                cells and fields.xmf nx*ny*nz cells at every output time, with their arrays
-#   render       render.py writes its three PNGs (offscreen; through xvfb-run when there is no
-#                X display); on an output without particles too, without a warning
+#   render       render.py writes its four PNGs (offscreen; through xvfb-run when there is no
+#                X display); on an output without particles too, without a warning; the
+#                partition picture holds the outline colour of every rank of the 2-rank run
 #   nodisplay    render.py without DISPLAY either renders (a ParaView that draws offscreen) or
 #                exits 2 saying that there is no X display; never killed by a signal
 # paraview and render exit 77 (SKIPPED) where there is no pvpython; render also where there is
@@ -177,9 +178,21 @@ EOF
   rc=$?
   tail -5 "$work/render.log"
   [[ $rc -eq 0 ]] || fail "render.py exited $rc"
-  for f in render_eps render_speed render_particles; do
+  for f in render_eps render_speed render_particles render_ranks; do
     [[ -s "$work/r/$f.png" ]] || fail "no $f.png"
   done
+  # render_ranks.png: each rank's block outline in its tab20 colour (flat lines: exact pixels)
+  "$py" - "$work/r/render_ranks.png" <<'EOF2' || fail "render_ranks.png lacks a rank's colour"
+import sys
+import matplotlib.image as mpimg
+import numpy as np
+img = (mpimg.imread(sys.argv[1])[..., :3] * 255).round().astype(int)
+for r, c in enumerate(["#1f77b4", "#aec7e8"]):  # ranks 0 and 1
+    rgb = np.array([int(c[i:i + 2], 16) for i in (1, 3, 5)])
+    n = int((np.abs(img - rgb).max(axis=-1) <= 2).sum())
+    print("rank %d colour %s: %d pixels" % (r, c, n))
+    assert n >= 50, (r, c, n)
+EOF2
   # an output without particles: the three pictures, no warning
   run 1 "$work/empty" --set output.interval_steps=5 --set output.snapshot=false \
     --set run.steps=5 --set 'particles.sources=[]'
