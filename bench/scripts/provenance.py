@@ -72,12 +72,14 @@ def utc_now():
 
 
 def source_tree(root=ROOT):
-    """(commit, dirty) of the git checkout at root: the full hash and whether tracked files differ
-    from it; ("unknown", None) outside a git checkout or without git."""
+    """(commit, dirty) of the git checkout at root: the full hash and whether tracked files other
+    than PNG images differ from it (re-drawing the committed plots one after the other does not
+    make the next one "dirty"); ("unknown", None) outside a git checkout or without git."""
     commit = _git(["rev-parse", "HEAD"], root)
     if not commit:
         return "unknown", None
-    status = _git(["status", "--porcelain", "--untracked-files=no"], root)
+    status = _git(["status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)*.png"],
+                  root)
     return commit, (bool(status) if status is not None else None)
 
 
