@@ -52,12 +52,19 @@ Usage:
   model.py predict --costs costs.json --plan plan.json [plan2.json ...] --profile edr-ib|PINGPONG.json
                    [--stream stream.json] [--noise noise-*.json ...] [--csv out.csv]
                    [--png out.png] [--title T]
+  model.py plot --csv out.csv --png out.png [--title T]     # re-draw the figure from its CSV
 Validation at 1 and 2 ranks: bench/scripts/validate_model.py.
 """
 import argparse
+import csv
 import json
 import math
+import os
+import re
 import sys
+import textwrap
+
+import provenance  # bench/scripts/provenance.py: the stamp on every plot
 
 GROUPS = {
     "fluid": ["fluid_momentum", "fluid_boundary", "fluid_project", "fluid_cell_fields"],
@@ -279,6 +286,8 @@ def calibrate(report, key="avg", corun=None, stream=None, pfmg1=None, pfmg2=None
     frozen = report.get("particles", {}).get("frozen", False)
     costs = {
         "source": report["case"] if isinstance(report["case"], str) else str(report["case"]),
+        # the 1-rank run the unit costs come from (stamped on the model's figures)
+        "provenance": report.get("provenance"),
         "cells": cells,
         "fluid_per_cell_step": tg["fluid"] / (cells * steps),
         "pressure_setup_per_cell_step": tg["pressure_setup"] / (cells * steps),
@@ -547,7 +556,25 @@ def main():
     p.add_argument("--csv")
     p.add_argument("--png")
     p.add_argument("--title", default="")
+    q = sp.add_parser("plot", help="re-draw predict's figure from its --csv")
+    q.add_argument("--csv", required=True)
+    q.add_argument("--png", required=True)
+    q.add_argument("--title", default="", help="the case's name in the title (default: the CSV's)")
     a = ap.parse_args()
+    if a.cmd == "plot":
+        with open(a.csv) as f:
+            head = f.readline()
+            rows = list(csv.DictReader(f))
+        m = re.match(r"# MODEL \(bench/scripts/model.py\), profile (.*), costs from (.*)$",
+                     head.strip())
+        prof_name, source = (m.group(1), m.group(2)) if m else ("?", "?")
+        for r in rows:
+            for k in r:
+                if k != "strategy":
+                    r[k] = float(r[k])
+        draw(rows, a.png, a.title or os.path.splitext(os.path.basename(a.csv))[0], prof_name,
+             source, data_files=[a.csv], extra="MODEL, re-drawn from its CSV")
+        return
     if a.cmd == "calibrate":
         def load(path):
             if not path:
@@ -610,29 +637,42 @@ def main():
             r["strategy"], r["ranks"], r["step_s"], r["speedup"], 100 * r["fluid"], 100 * r["dem"],
             100 * r["coupling"], 100 * r["inter_physics"], 100 * r["wait"], r["imbalance"]))
     if a.png:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
-        for s in sorted({r["strategy"] for r in out}):
-            rs = [r for r in out if r["strategy"] == s]
-            P = [r["ranks"] for r in rs]
-            ax[0].loglog(P, [r["speedup"] for r in rs], "o-", label=s)
-            ax[1].semilogx(P, [100 * r["inter_physics"] for r in rs], "o-", label=s)
-            ax[2].semilogx(P, [100 * r["fluid"] for r in rs], "o-", label=s + " fluid")
-            ax[2].semilogx(P, [100 * r["dem"] for r in rs], "s--", label=s + " DEM")
-            ax[2].semilogx(P, [100 * r["wait"] for r in rs], "^:", label=s + " wait")
-        ax[0].set_ylabel("speedup (vs 1 rank)")
-        ax[1].set_ylabel("inter-physics exchange (% of step)")
-        ax[2].set_ylabel("% of step")
-        for x in ax:
-            x.set_xlabel("ranks")
-            x.grid(True, which="both", alpha=0.3)
-            x.legend(fontsize=7)
-        fig.suptitle("MODEL (not measured): %s, profile %s, unit costs from %s" %
-                     (a.title or plan["case"], prof["name"], costs["source"]))
-        fig.tight_layout()
-        fig.savefig(a.png, dpi=110)
+        cost_run = provenance.of_report(costs) if costs.get("provenance") else None
+        draw(out, a.png, a.title or plan["case"], prof["name"], costs["source"],
+             reports=[costs] if cost_run else [],
+             data_files=[] if cost_run else [a.costs],
+             extra="MODEL computed from these unit costs")
+
+
+def draw(out, png, title, prof_name, source, reports=(), data_files=(), extra="MODEL"):
+    """predict's figure: speedup, inter-physics share and the fluid / DEM / wait shares against
+    ranks, stamped: a MODEL, computed where drawn, from the unit costs' run (reports) or the
+    files given."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
+    for s in sorted({r["strategy"] for r in out}):
+        rs = [r for r in out if r["strategy"] == s]
+        P = [r["ranks"] for r in rs]
+        ax[0].loglog(P, [r["speedup"] for r in rs], "o-", label=s)
+        ax[1].semilogx(P, [100 * r["inter_physics"] for r in rs], "o-", label=s)
+        ax[2].semilogx(P, [100 * r["fluid"] for r in rs], "o-", label=s + " fluid")
+        ax[2].semilogx(P, [100 * r["dem"] for r in rs], "s--", label=s + " DEM")
+        ax[2].semilogx(P, [100 * r["wait"] for r in rs], "^:", label=s + " wait")
+    ax[0].set_ylabel("speedup (vs 1 rank)")
+    ax[1].set_ylabel("inter-physics exchange (% of step)")
+    ax[2].set_ylabel("% of step")
+    for x in ax:
+        x.set_xlabel("ranks")
+        x.grid(True, which="both", alpha=0.3)
+        x.legend(fontsize=7)
+    fig.suptitle("\n".join(textwrap.wrap(
+        "MODEL (not measured): %s, profile %s, unit costs from %s" % (title, prof_name, source),
+        170)))
+    fig.tight_layout()
+    provenance.stamp(fig, reports=reports, data_files=data_files, extra=extra)
+    provenance.savefig(fig, png, dpi=110)
 
 
 if __name__ == "__main__":

@@ -14,11 +14,14 @@ particle crosses --boundary (x, m) is marked.
 """
 import argparse
 import csv
+import os
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+import provenance  # noqa: E402  (bench/scripts/provenance.py: the stamp on every plot)
 
 QUANTITIES = (("speed", "particle speed |v|", "m/s"), ("force", "fluid force |F| on it", "N"),
               ("solid_volume", "deposited solid volume", "m^3"),
@@ -87,7 +90,16 @@ def main():
     axes[2].set_xlabel("time (s)")
     axes[0].set_title("Benchmark 1: one particle travelling across a process boundary", fontsize=10)
     fig.tight_layout()
-    fig.savefig(a.out, dpi=120)
+    # the runs behind the series: each series.csv's report.json beside it (else the file itself)
+    reports, files = [], []
+    for s in a.series:
+        rep = os.path.join(os.path.dirname(os.path.abspath(s)), "report.json")
+        if provenance.of_report(rep) is not None:
+            reports.append(rep)
+        else:
+            files.append(s)
+    provenance.stamp(fig, reports=reports, data_files=files)
+    provenance.savefig(fig, a.out, dpi=120)
     print(f"plot_case1: wrote {a.out}")
 
 

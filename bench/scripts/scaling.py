@@ -37,6 +37,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 
+import provenance  # noqa: E402  (bench/scripts/provenance.py: the stamp on every plot)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
@@ -126,7 +128,15 @@ def shade_oversubscribed(ax, rows, cores):
                label=f"oversubscribed (> {cores} cores)")
 
 
-def plot(rows, args, cores):
+def plot(rows, args, cores, reports=()):
+    """speedup.png, shares.png, inter_physics.png; stamped with the runs' provenance (reports),
+    or, re-plotted, with scaling.csv's (its sidecar, else the commit that last changed it)."""
+    csv_path = os.path.join(args.out, "scaling.csv")
+
+    def save(fig, fname):
+        provenance.stamp(fig, reports=reports, data_files=[] if reports else [csv_path])
+        provenance.savefig(fig, os.path.join(args.out, fname), dpi=120)
+
     name = os.path.basename(args.case).replace(".json", "")
     reps = max(int(r.get("repeat", 0)) for r in rows) + 1
     band = f"; bands: min-max of {reps} repeats" if reps > 1 else ""
@@ -153,7 +163,7 @@ def plot(rows, args, cores):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "speedup.png"), dpi=120)
+    save(fig, "speedup.png")
     plt.close(fig)
 
     present = [(m, st) for m, st in COUPLED_MODES if best(rows, m)]
@@ -178,7 +188,7 @@ def plot(rows, args, cores):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)
     fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "shares.png"), dpi=120)
+    save(fig, "shares.png")
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(7.2, 6.4))
@@ -223,7 +233,7 @@ def plot(rows, args, cores):
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "inter_physics.png"), dpi=120)
+    save(fig, "inter_physics.png")
     plt.close(fig)
 
 
@@ -258,6 +268,7 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     csv_path = os.path.join(args.out, "scaling.csv")
     rows = []
+    reports = []
     if args.plot_only:
         with open(csv_path) as f:
             for r in csv.DictReader(f):
@@ -268,16 +279,18 @@ def main():
         for n in args.ranks:
             for mode in args.modes:
                 for rep in range(args.repeat):
-                    rows.append(row_of(run_point(args, n, mode, rep), n, mode, rep, args.cores))
+                    reports.append(run_point(args, n, mode, rep))
+                    rows.append(row_of(reports[-1], n, mode, rep, args.cores))
         with open(csv_path, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
             w.writeheader()
             w.writerows(rows)
+        provenance.write_sidecar(csv_path, reports)  # scaling.csv.provenance.json, for --plot-only
     bad = shares_without_bytes(rows)
     if bad:
         print("scaling: warning: an across-ranks share without bytes in", len(bad), "rows, e.g.",
               bad[0], file=sys.stderr)
-    plot(rows, args, args.cores)
+    plot(rows, args, args.cores, reports)
     print(f"scaling: wrote {csv_path} and plots in {args.out}")
 
 

@@ -21,6 +21,10 @@ model_step_s, model_error (model / simulated - 1) and the model's shares; the fi
 model dashed. The paper's figures are drawn where it gives them (case 2 at 252 cores: 81 %
 fluid, 18 % DummyDEM, < 1 % inter-physics; case 3: > 92 % DEM, < 8 % fluid, < 0.1 %
 inter-physics; independent partitions after SediFoam: ~30 % inter-physics above 200 ranks).
+
+--plot-only CSV [--png PNG]: the figure again from a CSV this script wrote (bench/results/smpi/).
+The figure is stamped with the simulated runs' provenance (bench/scripts/provenance.py; the CSV's
+sidecar smpi_scaling.csv.provenance.json keeps it for --plot-only).
 """
 import argparse
 import csv
@@ -32,10 +36,12 @@ import sys
 
 import dense_bed
 import model
+import provenance
 import smpi_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHARES = ["fv", "dem", "coupling", "inter_physics", "wait"]
+REPORTS = []  # the simulated runs' report.json (their provenance stamps the figure)
 
 
 # The paper's figures (Pozzetti et al.), % of the step: (case name prefix, ranks, share, value, how)
@@ -109,6 +115,7 @@ def run_one(a, strategy, ranks, folder):
     if out.returncode != 0 or not m:
         sys.exit(f"smpi_scaling.py: {strategy} at {ranks} ranks failed (exit {out.returncode})")
     rep = json.load(open(os.path.join(folder, "report.json")))
+    REPORTS.append(rep)
     if not rep.get("provenance", {}).get("simulated", False):
         sys.exit(f"smpi_scaling.py: {folder}/report.json is not from a simulated run")
     row = {"strategy": strategy, "ranks": ranks,
@@ -124,8 +131,8 @@ def run_one(a, strategy, ranks, folder):
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case")
-    ap.add_argument("--ranks", required=True, help="comma-separated, e.g. 28,56,112")
+    ap.add_argument("case", nargs="?")
+    ap.add_argument("--ranks", help="comma-separated, e.g. 28,56,112 (required)")
     ap.add_argument("--strategies", default="uniform,balanced,tiled,independent")
     ap.add_argument("--platform", default="paper")
     ap.add_argument("--steps", type=int, default=2)
@@ -140,7 +147,15 @@ def main():
     ap.add_argument("--coloc", default=os.path.join(os.path.dirname(os.path.dirname(HERE)),
                                                     "build", "coloc"),
                     help="the real build's coloc, for `coloc plan` (--model)")
+    ap.add_argument("--plot-only", metavar="CSV", help="re-draw the figure from a CSV this "
+                    "script wrote (its first line gives platform, steps and the model's costs) "
+                    "to --png (default: CSV with .png)")
+    ap.add_argument("--png", help="with --plot-only: the figure's file")
     a = ap.parse_args()
+    if a.plot_only:
+        return plot_only(a.plot_only, a.png or os.path.splitext(a.plot_only)[0] + ".png")
+    if not a.case or not a.ranks:
+        ap.error("the case and --ranks are required (unless --plot-only)")
     ranks = [int(r) for r in a.ranks.split(",")]
     strategies = [s for s in a.strategies.split(",") if s]
     out = a.out or os.path.join("out", case_name(a.case) + "-smpi-scaling")
@@ -176,7 +191,44 @@ def main():
         w = csv.DictWriter(f, fieldnames=list(dict.fromkeys(keys)), restval="")
         w.writeheader()
         w.writerows(rows)
+    provenance.write_sidecar(path, REPORTS)  # smpi_scaling.csv.provenance.json
     print(f"smpi_scaling.py: wrote {path}")
+    return plot(rows, strategies, ranks, case_name(a.case), a.platform, a.steps,
+                mod_src if mod else None, os.path.join(out, "smpi_scaling.png"), REPORTS, [])
+
+
+def plot_only(path, png):
+    """The figure again from a CSV main() wrote: its first line names the platform, the steps
+    and the model's costs."""
+    with open(path) as f:
+        head = f.readline()
+        rows = []
+        for r in csv.DictReader(f):
+            row = {}
+            for k, v in r.items():
+                if v == "":
+                    continue  # a column of other rows (the model's where it ran)
+                try:
+                    row[k] = float(v) if k != "strategy" else v
+                except ValueError:
+                    row[k] = v
+            row["ranks"] = int(row["ranks"])
+            rows.append(row)
+    m = re.match(r"# SIMULATED \(SimGrid SMPI, platform (.*?), contention-free\): (.*?), (\d+) "
+                 r"steps a run.*?(?:; MODEL columns: model.py, costs from (.*?), profile .*)?$",
+                 head.strip())
+    if not m:
+        sys.exit(f"smpi_scaling.py: {path} does not start with this script's comment line")
+    platform, name, steps, mod_src = m.group(1), m.group(2), int(m.group(3)), m.group(4)
+    strategies = list(dict.fromkeys(r["strategy"] for r in rows))
+    ranks = sorted({r["ranks"] for r in rows})
+    return plot(rows, strategies, ranks, name, platform, steps, mod_src, png, [], [path])
+
+
+def plot(rows, strategies, ranks, name, platform, steps, mod_src, png, reports, data_files):
+    """speedup, inter-physics share, fluid and DEM shares against the simulated ranks; the
+    model's points dashed where the rows have them; stamped with the runs' provenance."""
+    mod = mod_src is not None
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -204,7 +256,6 @@ def main():
             ax3.plot(Pm, [100 * r["model_share_dem"] for r in rm], "x:", color=c)
     lo, hi = min(ranks), max(ranks)
     ax1.plot([lo, hi], [lo, hi], "k:", label="ideal")
-    name = case_name(a.case)
     marks = {"fv": ax3, "dem": ax3, "inter_physics": ax2}
     for prefix, P, share, v, how in PAPER:
         if name.startswith(prefix):
@@ -221,13 +272,13 @@ def main():
         ax.set_xlabel("simulated MPI ranks")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(f"SIMULATED (SimGrid SMPI, {a.platform} cluster, contention-free): {name}, "
-                 f"{a.steps} steps; solid: simulated"
+    fig.suptitle(f"SIMULATED (SimGrid SMPI, {platform} cluster, contention-free): {name}, "
+                 f"{steps} steps; solid: simulated"
                  + (f", dashed: MODEL (model.py, same platform, costs from {mod_src})"
                     if mod else "") + "; *: the paper", fontsize=9)
     fig.tight_layout()
-    png = os.path.join(out, "smpi_scaling.png")
-    fig.savefig(png, dpi=110)
+    provenance.stamp(fig, reports=reports, data_files=data_files)
+    provenance.savefig(fig, png, dpi=110)
     print(f"smpi_scaling.py: wrote {png}")
     return 0
 

@@ -174,7 +174,12 @@ def main():
             else "")
     fig.suptitle("%s: step %d, t = %.6g s\n%s" % (case, step, time, sub), fontsize=10)
     png = args.png or os.path.join(args.out_dir, "snapshot.png")
-    fig.savefig(png, dpi=110)
+    # where the picture comes from: the run's report.json provenance (else the fields file's)
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import provenance
+    has = provenance.of_report(report) is not None
+    provenance.stamp(fig, reports=[report] if has else [], data_files=[] if has else [fpath])
+    provenance.savefig(fig, png, dpi=110)
     print("snapshot.py: wrote %s" % png)
     return 0
 

@@ -27,6 +27,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+import provenance  # noqa: E402  (bench/scripts/provenance.py: the stamp on every plot)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
@@ -78,6 +80,7 @@ def main():
                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1")
     path = os.path.join(a.out, "strategies.csv")
     rows = []
+    reports = []  # the runs' report.json (their provenance stamps the plots)
     if a.plot_only:
         with open(path) as f:
             for r in csv.DictReader(f):
@@ -104,11 +107,13 @@ def main():
                     print("strategies:", " ".join(cmd), flush=True)
                     subprocess.run(cmd, check=True, env=env)
                     with open(os.path.join(out, "report.json")) as f:
-                        rows.append(row_of(json.load(f), s, n, rep, a.cores))
+                        reports.append(json.load(f))
+                        rows.append(row_of(reports[-1], s, n, rep, a.cores))
         with open(path, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
             w.writeheader()
             w.writerows(rows)
+        provenance.write_sidecar(path, reports)  # strategies.csv.provenance.json, for --plot-only
     name = os.path.basename(a.case).replace(".json", "")
     reps = max(int(r.get("repeat", 0) or 0) for r in rows) + 1
     band = f"; bands: min-max of {reps} repeats" if reps > 1 else "; one run per point"
@@ -151,7 +156,9 @@ def main():
         ax.set_title(f"{name}: {ylabel}\n(median of the repeats{band})", fontsize=9)
         ax.legend(fontsize=8)
         fig.tight_layout()
-        fig.savefig(os.path.join(a.out, fname), dpi=120)
+        # the runs (or, re-plotted, strategies.csv and its sidecar) behind the plot
+        provenance.stamp(fig, reports=reports, data_files=[] if reports else [path])
+        provenance.savefig(fig, os.path.join(a.out, fname), dpi=120)
         plt.close(fig)
 
     plot("imbalance", "load imbalance: max / mean over ranks of the busy time (1)", "imbalance.png")
