@@ -147,6 +147,25 @@ def main():
         d.FontSize = 14
         d.Color = [0, 0, 0]
         d.WindowLocation = "Upper Center"
+        provenance_stamp(v)
+
+    # Where the pictures come from (bench/scripts/provenance.py): the run's report.json and the
+    # machine drawing them, at the bottom of each.
+    report_path = os.path.join(out, "report.json")
+    try:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import provenance
+        stamp_text = provenance.describe(
+            reports=[report_path] if os.path.exists(report_path) else [])[0]
+    except Exception as e:  # a picture without its stamp rather than none
+        stamp_text = "provenance unavailable: %s" % e
+
+    def provenance_stamp(v):
+        tx = Text(Text=stamp_text.replace("|", "/"))
+        d = Show(tx, v)
+        d.FontSize = 9
+        d.Color = [0.4, 0.4, 0.4]
+        d.WindowLocation = "Lower Center"
 
     def flat(d):  # true colours on the plane (no shading)
         d.Ambient = 1.0
