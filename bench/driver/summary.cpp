@@ -71,10 +71,11 @@ std::string figureOfMeritLine(const Json& f) {
   char b[256];
   std::snprintf(b, sizeof b,
                 "coloc: figure of merit: %.4g particle-steps/s/core, %.4g cell-steps/s/core, "
-                "inter-physics %.3g%% of the step (%lld cores)",
+                "inter-physics %.3g%% of the step (%lld core%s)",
                 f.value("particle_steps_per_s_per_core", 0.0),
                 f.value("cell_steps_per_s_per_core", 0.0),
-                100.0 * f.value("inter_physics_share", 0.0), f.value("cores", 0LL));
+                100.0 * f.value("inter_physics_share", 0.0), f.value("cores", 0LL),
+                f.value("cores", 0LL) == 1 ? "" : "s");
   return b;
 }
 

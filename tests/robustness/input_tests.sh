@@ -263,7 +263,7 @@ assert f["cores"] == p["cores_used"] > 0, (f, p["cores_used"])
 assert close(f["particle_steps_per_s_per_core"], d["throughput"]["particle_steps_per_s"] / f["cores"])
 assert close(f["cell_steps_per_s_per_core"], d["throughput"]["cell_steps_per_s"] / f["cores"])
 assert f["inter_physics_share"] == d["fractions"]["inter_physics"]
-m = re.search(r"^coloc: figure of merit: ([0-9.e+]+) particle-steps/s/core, ([0-9.e+]+) cell-steps/s/core, inter-physics ([0-9.e+-]+)% of the step \((\d+) cores\)$", text, re.M)
+m = re.search(r"^coloc: figure of merit: ([0-9.e+]+) particle-steps/s/core, ([0-9.e+]+) cell-steps/s/core, inter-physics ([0-9.e+-]+)% of the step \((\d+) cores?\)$", text, re.M)
 assert m, "no figure-of-merit line"
 assert abs(float(m.group(1)) / f["particle_steps_per_s_per_core"] - 1) < 1e-3, m.group(1)
 assert abs(float(m.group(2)) / f["cell_steps_per_s_per_core"] - 1) < 1e-3, m.group(2)
