@@ -19,7 +19,7 @@ The vertical axis is the case's gravity (report.json), else the longest axis. An
 particles (none inserted yet, or all gone) gives the particle picture of the eps plane alone.
 Exit status 0 when the three PNGs are written; 1 with a message when a file has no data (e.g.
 particles read as points without cells); 2 with a message when this ParaView draws through an X
-server and there is none (no DISPLAY): run it under `xvfb-run -a pvpython ...` then, instead of
+server and there is none (no DISPLAY): run it under `xvfb-run -a -s '-screen 0 1280x1024x24 -noreset' pvpython ...` then, instead of
 letting ParaView crash.
 """
 import argparse
@@ -45,7 +45,7 @@ def needs_x_display():
 
 if needs_x_display():
     print("render.py: no X display (DISPLAY is not set) and this ParaView draws through X: run it "
-          "as  xvfb-run -a pvpython --force-offscreen-rendering bench/scripts/render.py OUT_DIR  "
+          "as  xvfb-run -a -s '-screen 0 1280x1024x24 -noreset' pvpython --force-offscreen-rendering bench/scripts/render.py OUT_DIR  "
           "(Debian: apt-get install xvfb), or set DISPLAY", file=sys.stderr)
     sys.exit(2)
 
@@ -212,13 +212,7 @@ def main():
         d.Opacity = 0.5
         bar(v, "eps", "fluid fraction eps (1)", "Upper Right Corner")
         if nparts > 0:
-            pd = Show(parts, v)
-            pd.SetRepresentationType("Point Gaussian")
-            pd.ScaleByArray = 1
-            pd.SetScaleArray = ["POINTS", "radius"]
-            pd.UseScaleFunction = 0
-            pd.GaussianRadius = 1.0
-            pd.ShaderPreset = "Sphere"
+            pd = show_spheres(parts, v)
             ColorBy(pd, ("POINTS", "v", "Magnitude"))
             pd.RescaleTransferFunctionToDataRange(True, False)
             bar(v, "v", "particle speed (m/s)")
@@ -248,6 +242,28 @@ TAB20 = ["#1f77b4", "#aec7e8", "#ff7f0e", "#ffbb78", "#2ca02c", "#98df8a", "#d62
          "#bcbd22", "#dbdb8d", "#17becf", "#9edae5"]
 
 
+def show_spheres(parts, v):
+    """The particles as spheres of their true radius (ParaView's Point Gaussian)."""
+    pd = Show(parts, v)
+    pd.SetRepresentationType("Point Gaussian")
+    pd.ScaleByArray = 1
+    pd.SetScaleArray = ["POINTS", "radius"]
+    pd.UseScaleFunction = 0
+    pd.GaussianRadius = 1.0
+    pd.ShaderPreset = "Sphere"
+    return pd
+
+
+def outline(v, lo, hi, colour, width):
+    """The edges of the box [lo, hi] in one colour."""
+    box = Box(XLength=hi[0] - lo[0], YLength=hi[1] - lo[1], ZLength=hi[2] - lo[2],
+              Center=[0.5 * (lo[d] + hi[d]) for d in range(3)])
+    d = Show(box, v)
+    d.SetRepresentationType("Outline")
+    d.AmbientColor = d.DiffuseColor = colour
+    d.LineWidth = width
+
+
 def rgb(hexcolour):
     return [int(hexcolour[i:i + 2], 16) / 255.0 for i in (1, 3, 5)]
 
@@ -274,35 +290,15 @@ def draw_ranks(report, parts, nparts, t, stamp, size, view, title, png):
 
     up, sign = vertical_axis(report, length)
     v = view()
-    shown = []
     for r, b in enumerate(boxes):
-        lo, hi = phys(b)
-        box = Box(XLength=hi[0] - lo[0], YLength=hi[1] - lo[1], ZLength=hi[2] - lo[2],
-                  Center=[0.5 * (lo[d] + hi[d]) for d in range(3)])
-        d = Show(box, v)
-        d.SetRepresentationType("Outline")
-        d.AmbientColor = d.DiffuseColor = rgb(TAB20[r % 20])
-        d.LineWidth = 3.0
-        shown.append(box)
+        outline(v, *phys(b), rgb(TAB20[r % 20]), 3.0)
     dem = part.get("particle_boxes") or []
     for r, b in enumerate(dem):
         if r < len(boxes) and b == boxes[r]:
             continue
-        lo, hi = phys(b)
-        box = Box(XLength=hi[0] - lo[0], YLength=hi[1] - lo[1], ZLength=hi[2] - lo[2],
-                  Center=[0.5 * (lo[d] + hi[d]) for d in range(3)])
-        d = Show(box, v)
-        d.SetRepresentationType("Outline")
-        d.AmbientColor = d.DiffuseColor = [0, 0, 0]
-        d.LineWidth = 1.0
+        outline(v, *phys(b), [0, 0, 0], 1.0)
     if parts is not None and nparts > 0:
-        pd = Show(parts, v)
-        pd.SetRepresentationType("Point Gaussian")
-        pd.ScaleByArray = 1
-        pd.SetScaleArray = ["POINTS", "radius"]
-        pd.UseScaleFunction = 0
-        pd.GaussianRadius = 1.0
-        pd.ShaderPreset = "Sphere"
+        pd = show_spheres(parts, v)
         ColorBy(pd, ("POINTS", "rank"))
         lut = GetColorTransferFunction("rank")
         lut.InterpretValuesAsCategories = 1

@@ -121,7 +121,6 @@ paraview | render | nodisplay)
     echo "SKIPPED: no pvpython (install ParaView, e.g. apt-get install paraview, and re-run cmake)"
     exit 77
   fi
-  xvfb=()
   if [[ $test == nodisplay ]]; then
     run 1 "$work/r" --set output.interval_steps=5 --set output.snapshot=false --set run.steps=5
     timeout 300 env -u DISPLAY "$pvpython" --force-offscreen-rendering "$scripts/render.py" \
@@ -141,7 +140,11 @@ paraview | render | nodisplay)
       echo "SKIPPED: no X display and no xvfb-run (apt-get install xvfb) for pvpython to render"
       exit 77
     fi
-    xvfb=(xvfb-run -a)
+    # One X server for every picture of the test, which does not reset when its last client
+    # leaves: ParaView opens the display more than once, and a connection made while the server
+    # resets fails ("bad X server connection", SIGABRT; one run in three here without -noreset).
+    exec xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" bash "${BASH_SOURCE[0]}" "$test" "$coloc" "$mpiexec" "$py" "$case" "$work" \
+      "$pvpython"
   fi
   run 2 "$work/r" --set output.interval_steps=5 --set output.snapshot=false
   if [[ $test == paraview ]]; then
@@ -173,7 +176,7 @@ EOF
     [[ $rc -eq 0 ]] || fail "ParaView probe exited $rc"
     exit 0
   fi
-  timeout 300 "${xvfb[@]}" "$pvpython" --force-offscreen-rendering "$scripts/render.py" "$work/r" \
+  timeout 300 "$pvpython" --force-offscreen-rendering "$scripts/render.py" "$work/r" \
     > "$work/render.log" 2>&1
   rc=$?
   tail -5 "$work/render.log"
@@ -196,7 +199,7 @@ EOF2
   # an output without particles: the three pictures, no warning
   run 1 "$work/empty" --set output.interval_steps=5 --set output.snapshot=false \
     --set run.steps=5 --set 'particles.sources=[]'
-  timeout 300 "${xvfb[@]}" "$pvpython" --force-offscreen-rendering "$scripts/render.py" \
+  timeout 300 "$pvpython" --force-offscreen-rendering "$scripts/render.py" \
     "$work/empty" > "$work/render_empty.log" 2>&1
   rc=$?
   tail -5 "$work/render_empty.log"
