@@ -14,26 +14,35 @@ namespace coloc {
 namespace {
 
 // matplotlib's tab20, the palette snapshot.py colours ranks with: rank r takes entry r % 20.
-constexpr const char* kRankColour[20] = {
-    "#1f77b4", "#aec7e8", "#ff7f0e", "#ffbb78", "#2ca02c", "#98df8a", "#d62728",
-    "#ff9896", "#9467bd", "#c5b0d5", "#8c564b", "#c49c94", "#e377c2", "#f7b6d2",
-    "#7f7f7f", "#c7c7c7", "#bcbd22", "#dbdb8d", "#17becf", "#9edae5"};
+constexpr const char* kRankColour[20] = {"#1f77b4", "#aec7e8", "#ff7f0e", "#ffbb78", "#2ca02c",
+                                         "#98df8a", "#d62728", "#ff9896", "#9467bd", "#c5b0d5",
+                                         "#8c564b", "#c49c94", "#e377c2", "#f7b6d2", "#7f7f7f",
+                                         "#c7c7c7", "#bcbd22", "#dbdb8d", "#17becf", "#9edae5"};
 
-constexpr double kPanelWidth = 300;   // px for the across axis (the up axis keeps the aspect)
+constexpr double kPanelWidth = 300;  // px for the across axis (the up axis keeps the aspect)
 constexpr double kPanelHeightMax = 420;
-constexpr double kMargin = 40;        // around each panel: titles above, the axis below
-constexpr double kTitle = 44;         // two lines of title
-constexpr int kDensityBins = 100;     // at most this many grey cells along each in-plane axis
+constexpr double kMargin = 40;     // around each panel: titles above, the axis below
+constexpr double kTitle = 44;      // two lines of title
+constexpr int kDensityBins = 100;  // at most this many grey cells along each in-plane axis
 
 std::string escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -129,7 +138,8 @@ void writeLayoutSvg(const std::string& path, const GlobalGrid& g, const LayoutPl
           const int u = static_cast<int>(1LL * c[plane.across] * bx / f.nx);
           const int v = static_cast<int>(1LL * c[plane.up] * by / f.ny);
           bins[static_cast<std::size_t>(u) + static_cast<std::size_t>(bx) * v] +=
-              particlesPerCell[static_cast<std::size_t>(i + g.cells[0] * (j + 1LL * g.cells[1] * k))];
+              particlesPerCell[static_cast<std::size_t>(i +
+                                                        g.cells[0] * (j + 1LL * g.cells[1] * k))];
         }
   }
   const double binMax = *std::max_element(bins.begin(), bins.end());
@@ -191,12 +201,15 @@ void writeLayoutSvg(const std::string& path, const GlobalGrid& g, const LayoutPl
     const double lo[2] = {g.origin[plane.across], g.origin[plane.up]};
     const double hi[2] = {lo[0] + g.length[plane.across], lo[1] + g.length[plane.up]};
     char t[160];
-    std::snprintf(t, sizeof t, "%s: %g .. %g m (%d cells)", std::string(1, names[plane.across]).c_str(),
-                  lo[0], hi[0], f.nx);
-    o << "<text x=\"0\" y=\"" << num(f.h + 15) << "\" font-size=\"10\">" << escape(t) << "</text>\n";
-    std::snprintf(t, sizeof t, "%s: %g .. %g m (%d cells), up %s", std::string(1, names[plane.up]).c_str(),
-                  lo[1], hi[1], f.ny, plane.upIsPlus ? "+" : "-");
-    o << "<text x=\"0\" y=\"" << num(f.h + 28) << "\" font-size=\"10\">" << escape(t) << "</text>\n";
+    std::snprintf(t, sizeof t, "%s: %g .. %g m (%d cells)",
+                  std::string(1, names[plane.across]).c_str(), lo[0], hi[0], f.nx);
+    o << "<text x=\"0\" y=\"" << num(f.h + 15) << "\" font-size=\"10\">" << escape(t)
+      << "</text>\n";
+    std::snprintf(t, sizeof t, "%s: %g .. %g m (%d cells), up %s",
+                  std::string(1, names[plane.up]).c_str(), lo[1], hi[1], f.ny,
+                  plane.upIsPlus ? "+" : "-");
+    o << "<text x=\"0\" y=\"" << num(f.h + 28) << "\" font-size=\"10\">" << escape(t)
+      << "</text>\n";
     o << "</g>\n";
   }
   char where[200];

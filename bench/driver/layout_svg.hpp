@@ -14,10 +14,10 @@ namespace coloc {
 /// One panel: a strategy's layout.
 struct LayoutDrawing {
   std::string strategy;
-  std::string summary;                  // one line under the title (shapes, imbalance; or why not)
-  std::vector<IndexBox> fluid;          // rank r's fluid block (empty: the strategy cannot)
-  std::vector<IndexBox> particles;      // rank r's particle box; drawn dashed where it differs
-  bool chosen = false;                  // the case's partition.strategy
+  std::string summary;              // one line under the title (shapes, imbalance; or why not)
+  std::vector<IndexBox> fluid;      // rank r's fluid block (empty: the strategy cannot)
+  std::vector<IndexBox> particles;  // rank r's particle box; drawn dashed where it differs
+  bool chosen = false;              // the case's partition.strategy
 };
 
 /// The plane drawn: the vertical axis (gravity's, else the longest), the longer of the other two

@@ -93,7 +93,8 @@ int main(int argc, char** argv) {
   plan->add_option("--ranks", planOpts.ranks, "rank counts, comma-separated, e.g. 28,56,1024")
       ->required();
   plan->add_option("--strategy", planOpts.strategies,
-                   "uniform, balanced, independent (repeatable; default: all)");
+                   "uniform, balanced, independent, tiled (repeatable; default: the first "
+                   "three, tiled only when named: docs/plan.md)");
   plan->add_option("--set", planOpts.overrides, "override a case key (repeatable)")
       ->take_all()
       ->allow_extra_args(false);

@@ -245,6 +245,26 @@ if st == "balanced":
                rep["partition"]["balanced"]["uniform_modelled_imbalance"]) < 1e-3
 EOF2
     done
+    # coloc check and coloc plan model the same imbalance for every strategy (independent too:
+    # fluid cells on the fluid's blocks, particles on their own boxes)
+    timeout 60 "$coloc" check "$case" --ranks 4 > "$work/check4.txt" 2>&1 || { cat "$work/check4.txt"; fail "check 4"; }
+    timeout 60 "$coloc" plan "$case" --ranks 4 --strategy uniform balanced independent tiled \
+      --out "$work/plan4" > "$work/plan4.txt" 2>&1 || { cat "$work/plan4.txt"; fail "plan 4"; }
+    "$py" - "$work/check4.txt" "$work/plan4.txt" <<'EOF2' || fail "check and plan model different imbalances"
+import re, sys
+check, plan = open(sys.argv[1]).read(), open(sys.argv[2]).read()
+n = 0
+for st in ("uniform", "balanced", "independent", "tiled"):
+    c = re.search(r"^[* ] " + st + r" .* ([0-9.]+) +[0-9.]+ [KMG]iB$", check, re.M)
+    p = re.search(r"^" + st + r" +4 +\S+ +\S+ +([0-9.]+) ", plan, re.M)
+    if not p:
+        continue
+    assert c, "no check line for " + st
+    print(st, "check", c.group(1), "plan", p.group(1))
+    assert abs(float(c.group(1)) - float(p.group(1))) < 2e-3, st
+    n += 1
+assert n >= 3, n
+EOF2
     "$expect" "an inlet but no outlet" -- "$coloc" check "$case" --ranks 2 \
       --set 'fluid.boundary.zhi={"type":"wall"}' || fail "check of a bad case"
     # a CFL the run stops at in its first step: check refuses the case (and the run does stop);
