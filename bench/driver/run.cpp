@@ -30,6 +30,7 @@
 #include "coloc/fv/library_version.hpp"
 #include "coloc/io/library_version.hpp"
 #include "diagnostics.hpp"
+#include "progress.hpp"
 #include "restart_account.hpp"
 #include "run_folder.hpp"
 #include "run_log.hpp"
@@ -37,53 +38,6 @@
 
 namespace coloc {
 namespace {
-
-/// Rank 0 prints a progress line every `interval` seconds: step, simulated time, step rate,
-/// estimated time left and the pressure iterations (last, average over the run).
-class Progress {
- public:
-  Progress(const Comm& comm, double interval, const coupling::Simulation& sim, RunLog& log)
-      : log_(log),
-        root_(comm.isRoot()),
-        interval_(interval),
-        steps0_(sim.steps()),
-        time0_(sim.time()) {
-    t0_ = last_ = MPI_Wtime();
-  }
-  void update(coupling::Simulation& sim, long long maxSteps, double endTime) {
-    if (!root_ || interval_ <= 0) return;
-    const double now = MPI_Wtime();
-    if (now - last_ < interval_) return;
-    last_ = now;
-    const double elapsed = std::max(now - t0_, 1e-300);
-    const double done = static_cast<double>(sim.steps() - steps0_);
-    const double rate = done / elapsed;
-    double left = 0;
-    char total[32] = "";
-    if (maxSteps > 0) {
-      left = static_cast<double>(maxSteps - sim.steps()) / std::max(rate, 1e-300);
-      std::snprintf(total, sizeof total, "/%lld", maxSteps);
-    } else if (sim.time() > time0_) {
-      left = (endTime - sim.time()) / (sim.time() - time0_) * elapsed;
-    }
-    char pressure[96] = "";
-    if (const auto* f = sim.fluid()) {
-      const fv::FluidCounters c = f->counters();
-      if (c.solves > 0)
-        std::snprintf(pressure, sizeof pressure, "  p-iter %lld (avg %.1f)", c.itLast,
-                      static_cast<double>(c.itSum) / static_cast<double>(c.solves));
-    }
-    log_.out("coloc: step {}{}  t = {:.6g} s  dt = {:.3g} s  {:.2f} steps/s  {:.0f} s left{}\n",
-             sim.steps(), total, sim.time(), sim.lastDt(), rate, std::max(left, 0.0), pressure);
-  }
-
- private:
-  RunLog& log_;
-  bool root_;
-  double interval_, t0_, last_;
-  long long steps0_;
-  double time0_;
-};
 
 /// A per-step time series (series.csv): coupling totals, the particles of
 /// output.series_particles / output.series_particle_ids, and the bed diagnostics
@@ -312,10 +266,11 @@ LastWords lastWords;
 /// Runs `f` on every rank and agrees on the outcome at its end (coloc/core/failure.hpp): the
 /// exit status by the error's type (IoError: kIoErrorStatus, other coloc::Error: `errorCode`,
 /// anything else: kRunFailedStatus), the message of the lowest failing rank, and `where`, a
-/// number the caller gives the part of the phase that was running (set through the pointer).
+/// number the caller gives the part of the phase that was running (set through the pointer),
+/// and `request`, a flag any rank may raise for the verdict (read after `f`; progress.hpp).
 template <class F>
 FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& f,
-                              int* where = nullptr) {
+                              int* where = nullptr, const int* request = nullptr) {
   std::string err;
   int code = 0;
   try {
@@ -334,7 +289,8 @@ FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& 
     err = std::string("unexpected exception: ") + e.what();
     code = kRunFailedStatus;
   }
-  return channel.agree(err, code, static_cast<int>(stopSignal), where ? *where : 0);
+  return channel.agree(err, code, static_cast<int>(stopSignal), where ? *where : 0,
+                       request ? *request : 0);
 }
 
 /// Runs `f` on rank 0 only and throws its coloc::Error (an IoError as one) on every rank, so
@@ -541,40 +497,47 @@ int runCase(const Comm& world, const RunOptions& opts) {
   };
 
   // 2. Set-up: the physics, the series, the output of step 0.
+  // A progress row: rank 0's clock asks for one at the end of the set-up or a step (`request`,
+  // carried by its agreement); every rank computes it on the next step, and on the last.
   std::optional<Progress> progress;
+  int request = 0;
   std::optional<Series> series;
   std::optional<OutputWriter> output;
-  v = phase(channel, kInputErrorStatus, [&] {
-    if (opts.restart.empty())
-      simulation = std::make_unique<coupling::Simulation>(world, cfg);
-    else
-      simulation = std::make_unique<coupling::Simulation>(
-          cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
-    setupWall = MPI_Wtime() - t0;
-    const long long particleCount =
-        simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
-    if (root && !opts.quiet) {
-      const auto& dec = simulation->decomposition();
-      log.out(
-          "coloc: case '{}', mode {}, {} rank(s) as {}, {} cells, {} particles, "
-          "set-up {:.2f} s\n",
-          cfg.string("name"), runModeName(simulation->mode()), dec.size(), dec.shape(),
-          static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall);
-      if (!opts.restart.empty())
-        log.out("coloc: restarted from {} at step {}, t = {:.9g} s\n", opts.restart,
-                simulation->steps(), simulation->time());
-    }
-    if (!opts.restart.empty()) {
-      restartReport = accountRestart(world, opts.restart, cfg, log);
-      refuseEmptyRestart(cfg, opts.restart, simulation->steps(), simulation->time());
-    }
-    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation,
-                     log);
-    series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
-                   cfg);
-    output.emplace(simulation->decomposition(), outputOptions);
-    simulation->writeOutput(*output);
-  });
+  v = phase(
+      channel, kInputErrorStatus,
+      [&] {
+        if (opts.restart.empty())
+          simulation = std::make_unique<coupling::Simulation>(world, cfg);
+        else
+          simulation = std::make_unique<coupling::Simulation>(
+              cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
+        setupWall = MPI_Wtime() - t0;
+        const long long particleCount =
+            simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
+        if (root && !opts.quiet) {
+          const auto& dec = simulation->decomposition();
+          log.out(
+              "coloc: case '{}', mode {}, {} rank(s) as {}, {} cells, {} particles, "
+              "set-up {:.2f} s\n",
+              cfg.string("name"), runModeName(simulation->mode()), dec.size(), dec.shape(),
+              static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall);
+          if (!opts.restart.empty())
+            log.out("coloc: restarted from {} at step {}, t = {:.9g} s\n", opts.restart,
+                    simulation->steps(), simulation->time());
+        }
+        if (!opts.restart.empty()) {
+          restartReport = accountRestart(world, opts.restart, cfg, log);
+          refuseEmptyRestart(cfg, opts.restart, simulation->steps(), simulation->time());
+        }
+        progress.emplace(world, cfg, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), log);
+        series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
+                       cfg);
+        output.emplace(simulation->decomposition(), outputOptions);
+        simulation->writeOutput(*output);
+        progress->start(*simulation);  // the header and the first row
+        request = progress->request();
+      },
+      nullptr, &request);
   if (v.failed()) {
     say(v, "");
     writeReport("failed", v.code, v.message, "", 0);
@@ -591,13 +554,12 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const bool rebalanceThroughFile = cfg.string("partition.rebalance_move") == "file";
   const std::string rebalanceScratch =
       (std::filesystem::path(outDir) / "rebalance.tmp.h5").string();
-  const long long runSteps = cfg.integer("run.steps");
-  const double runEndTime = cfg.number("run.end_time");
   const long long pressureMaxIter = cfg.integer("fluid.pressure.max_iter");
   const double pressureTol = cfg.number("fluid.pressure.tol");
   simulation->beginRun();
   tLoop = MPI_Wtime();
   std::string lastCheckpoint;
+  bool rowDue = v.request != 0;
   while (!simulation->finished()) {
     int where = kStep;
     v = phase(
@@ -634,7 +596,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
               }
             }
           }
-          progress->update(*simulation, runSteps, runEndTime);
+          progress->row(*simulation, rowDue || simulation->finished());
+          request = progress->request();
           if (root && simulation->fluid()) {
             // The same count on every rank (hypre's norms are global); printed once.
             const fv::FluidCounters c = simulation->fluid()->counters();
@@ -654,7 +617,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
             throw IoError(series->error());
           }
         },
-        &where);
+        &where, &request);
+    rowDue = v.request != 0;
     if (v.failed()) {
       if (!simulation) {  // failed while moving onto new blocks: no state left in memory
         say(v, "re-balancing failed: ");
