@@ -10,8 +10,8 @@ shift || true
 
 packages=(cmake ninja-build g++ pkg-config openmpi-bin libopenmpi-dev libhypre-dev
           libhdf5-openmpi-dev hdf5-tools libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
-          nlohmann-json3-dev libcli11-dev libsleef-dev python3-matplotlib python3-numpy python3-h5py
-          clang-format)
+          nlohmann-json3-dev libcli11-dev libfmt-dev libsleef-dev python3-matplotlib python3-numpy
+          python3-h5py clang-format)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

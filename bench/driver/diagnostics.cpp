@@ -39,19 +39,25 @@ double kthSmallest(const Comm& comm, std::span<const double> h, long long k, dou
 
 }  // namespace
 
-BedDiagnostics bedDiagnostics(coupling::Simulation& sim, const Config& cfg) {
-  BedDiagnostics d;
-  const Decomposition& dec = sim.decomposition();
-  const Comm& comm = dec.comm();
-  const GlobalGrid& g = dec.grid();
-  const auto grav = cfg.vec3("gravity");
+VerticalAxis verticalAxis(const std::array<double, 3>& grav, const GlobalGrid& g) {
   int axis = 0;
   for (int a = 1; a < 3; ++a)
     if (std::abs(grav[a]) > std::abs(grav[axis])) axis = a;
   if (grav[axis] == 0)
     for (int a = 0; a < 3; ++a)
       if (g.length[a] > g.length[axis]) axis = a;
-  const bool up = grav[axis] <= 0;  // heights grow along +axis
+  return {axis, grav[axis] <= 0};
+}
+
+BedDiagnostics bedDiagnostics(coupling::Simulation& sim, const Config& cfg) {
+  BedDiagnostics d;
+  const Decomposition& dec = sim.decomposition();
+  const Comm& comm = dec.comm();
+  const GlobalGrid& g = dec.grid();
+  const auto grav = cfg.vec3("gravity");
+  const VerticalAxis vertical = verticalAxis(grav, g);
+  const int axis = vertical.axis;
+  const bool up = vertical.up;  // heights grow along +axis
   d.axis = axis;
   const int layers = g.cells[axis];
   const double h = g.spacing(axis);

@@ -4,6 +4,7 @@
 // values do not depend on the decomposition except for the order of floating-point sums.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,14 @@ struct BedDiagnostics {
   double solidBedMean = 0;  // mean over the layers from the bottom up to the one of bedHeight
   bool fluid = false, dem = false;
 };
+
+/// The vertical axis: gravity's (the longest axis of the box without gravity); `up` when heights
+/// grow along +axis (gravity pointing to -axis, or none).
+struct VerticalAxis {
+  int axis = 2;
+  bool up = true;
+};
+VerticalAxis verticalAxis(const std::array<double, 3>& gravity, const GlobalGrid& g);
 
 /// Collective. Reads the owned particles and (when there is a fluid) the owned pressure cells.
 BedDiagnostics bedDiagnostics(coupling::Simulation& sim, const Config& cfg);

@@ -84,11 +84,10 @@ Json accountRestart(const Comm& world, const std::string& checkpoint, const Conf
     if (!keptText.empty())
       log.out(
           "coloc: note: restart: kept from the checkpoint (in its particles and fields), "
-          "not the case's values: %s\n",
-          keptText.c_str());
+          "not the case's values: {}\n",
+          keptText);
     if (!takenText.empty())
-      log.out("coloc: note: restart: taken from the case (checkpoint -> case): %s\n",
-              takenText.c_str());
+      log.out("coloc: note: restart: taken from the case (checkpoint -> case): {}\n", takenText);
   }
   return report;
 }

@@ -30,6 +30,7 @@
 #include "coloc/fv/library_version.hpp"
 #include "coloc/io/library_version.hpp"
 #include "diagnostics.hpp"
+#include "progress.hpp"
 #include "restart_account.hpp"
 #include "run_folder.hpp"
 #include "run_log.hpp"
@@ -37,53 +38,6 @@
 
 namespace coloc {
 namespace {
-
-/// Rank 0 prints a progress line every `interval` seconds: step, simulated time, step rate,
-/// estimated time left and the pressure iterations (last, average over the run).
-class Progress {
- public:
-  Progress(const Comm& comm, double interval, const coupling::Simulation& sim, RunLog& log)
-      : log_(log),
-        root_(comm.isRoot()),
-        interval_(interval),
-        steps0_(sim.steps()),
-        time0_(sim.time()) {
-    t0_ = last_ = MPI_Wtime();
-  }
-  void update(coupling::Simulation& sim, long long maxSteps, double endTime) {
-    if (!root_ || interval_ <= 0) return;
-    const double now = MPI_Wtime();
-    if (now - last_ < interval_) return;
-    last_ = now;
-    const double elapsed = std::max(now - t0_, 1e-300);
-    const double done = static_cast<double>(sim.steps() - steps0_);
-    const double rate = done / elapsed;
-    double left = 0;
-    char total[32] = "";
-    if (maxSteps > 0) {
-      left = static_cast<double>(maxSteps - sim.steps()) / std::max(rate, 1e-300);
-      std::snprintf(total, sizeof total, "/%lld", maxSteps);
-    } else if (sim.time() > time0_) {
-      left = (endTime - sim.time()) / (sim.time() - time0_) * elapsed;
-    }
-    char pressure[96] = "";
-    if (const auto* f = sim.fluid()) {
-      const fv::FluidCounters c = f->counters();
-      if (c.solves > 0)
-        std::snprintf(pressure, sizeof pressure, "  p-iter %lld (avg %.1f)", c.itLast,
-                      static_cast<double>(c.itSum) / static_cast<double>(c.solves));
-    }
-    log_.out("coloc: step %lld%s  t = %.6g s  dt = %.3g s  %.2f steps/s  %.0f s left%s\n",
-             sim.steps(), total, sim.time(), sim.lastDt(), rate, std::max(left, 0.0), pressure);
-  }
-
- private:
-  RunLog& log_;
-  bool root_;
-  double interval_, t0_, last_;
-  long long steps0_;
-  double time0_;
-};
 
 /// A per-step time series (series.csv): coupling totals, the particles of
 /// output.series_particles / output.series_particle_ids, and the bed diagnostics
@@ -256,16 +210,16 @@ void drawSnapshot(const Config& cfg, const std::string& outDir, bool quiet, RunL
     char line[1024];
     while (std::fgets(line, sizeof line, pipe))
       if (quiet)
-        log.file("%s", line);
+        log.file("{}", line);
       else
-        log.out("%s", line);
+        log.out("{}", line);
     rc = ::pclose(pipe);
   }
   if (rc != 0)
     log.err(
-        "coloc: warning: no snapshot.png (%s exited with status %d); the run's output "
+        "coloc: warning: no snapshot.png ({} exited with status {}); the run's output "
         "is complete (set output.snapshot=false to skip the picture)\n",
-        script.string().c_str(), rc);
+        script.string(), rc);
 }
 
 /// The stop signal received so far (0: none); set by the handler installStopSignals() puts in.
@@ -312,10 +266,11 @@ LastWords lastWords;
 /// Runs `f` on every rank and agrees on the outcome at its end (coloc/core/failure.hpp): the
 /// exit status by the error's type (IoError: kIoErrorStatus, other coloc::Error: `errorCode`,
 /// anything else: kRunFailedStatus), the message of the lowest failing rank, and `where`, a
-/// number the caller gives the part of the phase that was running (set through the pointer).
+/// number the caller gives the part of the phase that was running (set through the pointer),
+/// and `request`, a flag any rank may raise for the verdict (read after `f`; progress.hpp).
 template <class F>
 FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& f,
-                              int* where = nullptr) {
+                              int* where = nullptr, const int* request = nullptr) {
   std::string err;
   int code = 0;
   try {
@@ -334,7 +289,8 @@ FailureChannel::Verdict phase(const FailureChannel& channel, int errorCode, F&& 
     err = std::string("unexpected exception: ") + e.what();
     code = kRunFailedStatus;
   }
-  return channel.agree(err, code, static_cast<int>(stopSignal), where ? *where : 0);
+  return channel.agree(err, code, static_cast<int>(stopSignal), where ? *where : 0,
+                       request ? *request : 0);
 }
 
 /// Runs `f` on rank 0 only and throws its coloc::Error (an IoError as one) on every rank, so
@@ -424,7 +380,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
   coupling::checkMemory(world, cfg);
   // Rank 0's messages, also into OUT/log.txt once the folder is ready (the lines before kept).
   RunLog log(world.isRoot());
-  for (const auto& n : notes) log.out("coloc: note: %s\n", n.c_str());
+  for (const auto& n : notes) log.out("coloc: note: {}\n", n);
   setFailureWait(cfg.number("run.failure_wait_s"));
   // Where the run comes from (collective): report.json's "provenance".
   Json prov = provenance(world, opts.commandLine);
@@ -442,7 +398,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
     ~ClearLastWords() { lastWords = {}; }
   } clearLastWords;
   const auto say = [&](const FailureChannel::Verdict& v, const std::string& before) {
-    log.err("coloc: error: %s%s\n", before.c_str(), v.message.c_str());
+    log.err("coloc: error: {}{}\n", before, v.message);
   };
 
   // 1. The output folders (rank 0): made; locked against a second run for as long as this one
@@ -536,47 +492,52 @@ int runCase(const Comm& world, const RunOptions& opts) {
       path = report.write(world, outDir);
       written = report.json();
     });
-    if (r.failed() && root)
-      log.err("coloc: error: could not write the report: %s\n", r.message.c_str());
+    if (r.failed() && root) log.err("coloc: error: could not write the report: {}\n", r.message);
     return r.failed() ? std::string() : path;
   };
 
   // 2. Set-up: the physics, the series, the output of step 0.
+  // A progress row: rank 0's clock asks for one at the end of the set-up or a step (`request`,
+  // carried by its agreement); every rank computes it on the next step, and on the last.
   std::optional<Progress> progress;
+  int request = 0;
   std::optional<Series> series;
   std::optional<OutputWriter> output;
-  v = phase(channel, kInputErrorStatus, [&] {
-    if (opts.restart.empty())
-      simulation = std::make_unique<coupling::Simulation>(world, cfg);
-    else
-      simulation = std::make_unique<coupling::Simulation>(
-          cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
-    setupWall = MPI_Wtime() - t0;
-    const long long particleCount =
-        simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
-    if (root && !opts.quiet) {
-      const auto& dec = simulation->decomposition();
-      log.out(
-          "coloc: case '%s', mode %s, %d rank(s) as %s, %lld cells, %lld particles, "
-          "set-up %.2f s\n",
-          cfg.string("name").c_str(), runModeName(simulation->mode()), dec.size(),
-          dec.shape().c_str(), static_cast<long long>(dec.grid().cellCount()), particleCount,
-          setupWall);
-      if (!opts.restart.empty())
-        log.out("coloc: restarted from %s at step %lld, t = %.9g s\n", opts.restart.c_str(),
-                simulation->steps(), simulation->time());
-    }
-    if (!opts.restart.empty()) {
-      restartReport = accountRestart(world, opts.restart, cfg, log);
-      refuseEmptyRestart(cfg, opts.restart, simulation->steps(), simulation->time());
-    }
-    progress.emplace(world, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), *simulation,
-                     log);
-    series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
-                   cfg);
-    output.emplace(simulation->decomposition(), outputOptions);
-    simulation->writeOutput(*output);
-  });
+  v = phase(
+      channel, kInputErrorStatus,
+      [&] {
+        if (opts.restart.empty())
+          simulation = std::make_unique<coupling::Simulation>(world, cfg);
+        else
+          simulation = std::make_unique<coupling::Simulation>(
+              cfg, coupling::Simulation::restartLayouts(world, cfg, opts.restart), opts.restart);
+        setupWall = MPI_Wtime() - t0;
+        const long long particleCount =
+            simulation->particles() ? simulation->particles()->globalCount() : 0;  // collective
+        if (root && !opts.quiet) {
+          const auto& dec = simulation->decomposition();
+          log.out(
+              "coloc: case '{}', mode {}, {} rank(s) as {}, {} cells, {} particles, "
+              "set-up {:.2f} s\n",
+              cfg.string("name"), runModeName(simulation->mode()), dec.size(), dec.shape(),
+              static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall);
+          if (!opts.restart.empty())
+            log.out("coloc: restarted from {} at step {}, t = {:.9g} s\n", opts.restart,
+                    simulation->steps(), simulation->time());
+        }
+        if (!opts.restart.empty()) {
+          restartReport = accountRestart(world, opts.restart, cfg, log);
+          refuseEmptyRestart(cfg, opts.restart, simulation->steps(), simulation->time());
+        }
+        progress.emplace(world, cfg, opts.quiet ? 0.0 : cfg.number("run.progress_interval_s"), log);
+        series.emplace(world, (std::filesystem::path(outDir) / "series.csv").string(), *simulation,
+                       cfg);
+        output.emplace(simulation->decomposition(), outputOptions);
+        simulation->writeOutput(*output);
+        progress->start(*simulation);  // the header and the first row
+        request = progress->request();
+      },
+      nullptr, &request);
   if (v.failed()) {
     say(v, "");
     writeReport("failed", v.code, v.message, "", 0);
@@ -593,13 +554,12 @@ int runCase(const Comm& world, const RunOptions& opts) {
   const bool rebalanceThroughFile = cfg.string("partition.rebalance_move") == "file";
   const std::string rebalanceScratch =
       (std::filesystem::path(outDir) / "rebalance.tmp.h5").string();
-  const long long runSteps = cfg.integer("run.steps");
-  const double runEndTime = cfg.number("run.end_time");
   const long long pressureMaxIter = cfg.integer("fluid.pressure.max_iter");
   const double pressureTol = cfg.number("fluid.pressure.tol");
   simulation->beginRun();
   tLoop = MPI_Wtime();
   std::string lastCheckpoint;
+  bool rowDue = v.request != 0;
   while (!simulation->finished()) {
     int where = kStep;
     v = phase(
@@ -629,21 +589,23 @@ int runCase(const Comm& world, const RunOptions& opts) {
               output->rebind(simulation->decomposition());
               ++rebalances;
               if (root && !opts.quiet) {
-                log.out("coloc: step %lld: re-balanced onto %s, modelled imbalance %.3f -> %.3f\n",
-                        simulation->steps(), simulation->decomposition().shape().c_str(),
-                        plan.currentImbalance, plan.newImbalance);
+                log.out(
+                    "coloc: step {}: re-balanced onto {}, modelled imbalance {:.3f} -> {:.3f}\n",
+                    simulation->steps(), simulation->decomposition().shape(), plan.currentImbalance,
+                    plan.newImbalance);
               }
             }
           }
-          progress->update(*simulation, runSteps, runEndTime);
+          progress->row(*simulation, rowDue || simulation->finished());
+          request = progress->request();
           if (root && simulation->fluid()) {
             // The same count on every rank (hypre's norms are global); printed once.
             const fv::FluidCounters c = simulation->fluid()->counters();
             if (c.unconverged > 0 && unconvergedWarned == 0)
               log.err(
-                  "coloc: warning: step %lld: the pressure solve did not converge "
-                  "(residual %.3g of the flux scale after %lld iterations, "
-                  "fluid.pressure.max_iter = %lld, tol = %g); counted in report.json "
+                  "coloc: warning: step {}: the pressure solve did not converge "
+                  "(residual {:.3g} of the flux scale after {} iterations, "
+                  "fluid.pressure.max_iter = {}, tol = {:g}); counted in report.json "
                   "fluid.unconverged_solves (fluid.pressure.on_no_convergence = error "
                   "stops the run)\n",
                   simulation->steps(), c.resLast, c.itLast, pressureMaxIter, pressureTol);
@@ -655,7 +617,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
             throw IoError(series->error());
           }
         },
-        &where);
+        &where, &request);
+    rowDue = v.request != 0;
     if (v.failed()) {
       if (!simulation) {  // failed while moving onto new blocks: no state left in memory
         say(v, "re-balancing failed: ");
@@ -685,17 +648,15 @@ int runCase(const Comm& world, const RunOptions& opts) {
           saved = path;
       }
       if (root) {
-        log.err("coloc: error: %s: %s\n", when, v.message.c_str());
+        log.err("coloc: error: {}: {}\n", when, v.message);
         if (!saved.empty())
           log.err(
-              "coloc: the state at the failure is in %s (status 'failed'; not "
-              "restartable)%s%s\n",
-              saved.c_str(),
-              lastCheckpoint.empty() ? "" : "; last good checkpoint: ", lastCheckpoint.c_str());
+              "coloc: the state at the failure is in {} (status 'failed'; not "
+              "restartable){}{}\n",
+              saved, lastCheckpoint.empty() ? "" : "; last good checkpoint: ", lastCheckpoint);
         else if (!lastCheckpoint.empty())
-          log.err("coloc: last good checkpoint: %s\n", lastCheckpoint.c_str());
-        if (!saveError.empty())
-          log.err("coloc: could not write the failed state: %s\n", saveError.c_str());
+          log.err("coloc: last good checkpoint: {}\n", lastCheckpoint);
+        if (!saveError.empty()) log.err("coloc: could not write the failed state: {}\n", saveError);
       }
       writeReport("failed", v.code, std::string(when) + ": " + v.message,
                   saved.empty() ? lastCheckpoint : saved, 0);
@@ -718,13 +679,13 @@ int runCase(const Comm& world, const RunOptions& opts) {
                       std::string("stopped by ") + signalName(sig), path, sig);
       if (root) {
         log.err(
-            "coloc: stopped by %s after step %lld (t = %.9g s); checkpoint: %s; "
-            "report: %s; exit status %d\n",
+            "coloc: stopped by {} after step {} (t = {:.9g} s); checkpoint: {}; "
+            "report: {}; exit status {}\n",
             signalName(sig), simulation->steps(), simulation->time(),
             path.empty() ? "none" : path.c_str(), report.empty() ? "none" : report.c_str(),
             kInterruptedBase + sig);
         if (!saveError.empty())
-          log.err("coloc: error: could not write the final checkpoint: %s\n", saveError.c_str());
+          log.err("coloc: error: could not write the final checkpoint: {}\n", saveError);
       }
       return kInterruptedBase + sig;
     }
@@ -745,7 +706,7 @@ int runCase(const Comm& world, const RunOptions& opts) {
   if (root) series->sync();
   if (root && unconvergedWarned > 0)
     log.err(
-        "coloc: warning: %lld pressure solve(s) of this run did not converge "
+        "coloc: warning: {} pressure solve(s) of this run did not converge "
         "(report.json fluid.unconverged_solves)\n",
         unconvergedWarned);
   const std::string path = writeReport("ok", 0, "", lastCheckpoint, 0);
@@ -761,8 +722,8 @@ int runCase(const Comm& world, const RunOptions& opts) {
         std::snprintf(resumed, sizeof resumed, ", steps %lld-%lld after the restart", start[0] + 1,
                       last);
       log.out(
-          "coloc: %lld steps (%lld DEM sub-steps)%s, t = %.6g s, %.3f s wall, "
-          "%.3g cell-steps/s, %.3g particle-steps/s, inter-physics %.3f%% of the step\n",
+          "coloc: {} steps ({} DEM sub-steps){}, t = {:.6g} s, {:.3f} s wall, "
+          "{:.3g} cell-steps/s, {:.3g} particle-steps/s, inter-physics {:.3f}% of the step\n",
           last - start[0], j["run"]["dem_substeps"].get<long long>() - start[1], resumed,
           j["run"]["sim_time"].get<double>(), j["run"]["wall_s"].get<double>(),
           j["throughput"]["cell_steps_per_s"].get<double>(),
@@ -773,12 +734,11 @@ int runCase(const Comm& world, const RunOptions& opts) {
     // both from the report just written; with --quiet in the log only.
     for (const std::string& line : phaseTable(j))
       if (opts.quiet)
-        log.file("coloc: %s\n", line.c_str());
+        log.file("coloc: {}\n", line);
       else
-        log.out("coloc: %s\n", line.c_str());
-    if (j.contains("figure_of_merit"))
-      log.out("%s\n", figureOfMeritLine(j["figure_of_merit"]).c_str());
-    log.out("coloc: report written to %s\n", path.c_str());
+        log.out("coloc: {}\n", line);
+    if (j.contains("figure_of_merit")) log.out("{}\n", figureOfMeritLine(j["figure_of_merit"]));
+    log.out("coloc: report written to {}\n", path);
   }
   if (world.isRoot()) drawSnapshot(cfg, outDir, opts.quiet, log);
   return 0;

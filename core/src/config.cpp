@@ -49,6 +49,8 @@ std::string kindName(KeyKind k) {
       return "a list of 3 integers";
     case KeyKind::NumberList:
       return "a list of numbers";
+    case KeyKind::NameList:
+      return "a list of names";
     case KeyKind::Object:
       return "an object";
     case KeyKind::List:
@@ -254,6 +256,17 @@ Schema& Schema::numberList(const std::string& path, std::optional<std::vector<do
   return *this;
 }
 
+Schema& Schema::nameList(const std::string& path, std::vector<std::string> def,
+                         const std::string& help, std::vector<std::string> choices) {
+  KeySpec s;
+  s.kind = KeyKind::NameList;
+  s.defaultValue = def;
+  s.choices = std::move(choices);
+  s.help = help;
+  insert(path, std::move(s));
+  return *this;
+}
+
 Schema& Schema::variant(const std::string& path, std::map<std::string, Schema> byType,
                         const std::string& defaultType, const std::string& help) {
   KeySpec s;
@@ -384,6 +397,41 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         out[key] = arr;
         break;
       }
+      case KeyKind::NameList: {
+        std::vector<std::string> names;
+        if (v.is_string()) {  // "a,b c": names separated by commas or spaces
+          std::string cur;
+          for (char c : v.get<std::string>() + " ") {
+            if (c == ',' || c == ' ' || c == '\t') {
+              if (!cur.empty()) names.push_back(cur);
+              cur.clear();
+            } else {
+              cur += c;
+            }
+          }
+        } else if (v.is_array()) {
+          for (std::size_t i = 0; i < v.size(); ++i) {
+            if (!v[i].is_string())
+              throw ConfigError(path + "[" + std::to_string(i) + "]",
+                                "expected a name (a string), got " + typeName(v[i]));
+            names.push_back(v[i].get<std::string>());
+          }
+        } else {
+          throw ConfigError(path,
+                            "expected a list of names (or one string of names separated "
+                            "by commas), got " +
+                                typeName(v));
+        }
+        std::string allowed;
+        for (auto& c : spec.choices) allowed += (allowed.empty() ? "" : ", ") + c;
+        if (names.empty()) throw ConfigError(path, "no names given, expected some of: " + allowed);
+        for (const auto& n : names)
+          if (!spec.choices.empty() &&
+              std::find(spec.choices.begin(), spec.choices.end(), n) == spec.choices.end())
+            throw ConfigError(path, "unknown name '" + n + "', expected some of: " + allowed);
+        out[key] = names;
+        break;
+      }
       case KeyKind::Object:
         if (spec.object) {
           out[key] = spec.object->resolve(present ? v : Json::object(), path);
@@ -421,7 +469,7 @@ std::string Schema::describe(const std::string& prefix) const {
       if (std::isfinite(spec.range.lo) || std::isfinite(spec.range.hi))
         os << ", range " << spec.range.describe();
     if (!spec.choices.empty()) {
-      os << ", one of";
+      os << (spec.kind == KeyKind::NameList ? ", each one of" : ", one of");
       for (auto& c : spec.choices) os << " " << c;
     }
     os << ")\n      " << spec.help << "\n";
@@ -709,6 +757,10 @@ const Json& Config::at(const std::string& path) const {
 std::array<double, 3> Config::vec3(const std::string& path) const {
   const auto& v = at(path);
   return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+}
+
+std::vector<std::string> Config::names(const std::string& path) const {
+  return at(path).get<std::vector<std::string>>();
 }
 
 std::array<long long, 3> Config::intVec3(const std::string& path) const {

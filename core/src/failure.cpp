@@ -186,15 +186,16 @@ FailureChannel::~FailureChannel() {
 }
 
 FailureChannel::Verdict FailureChannel::agree(const std::string& error, int code, int signal,
-                                              int where) const {
+                                              int where, int request) const {
   const int me = comm_.rank(), size = comm_.size();
   const bool mine = !error.empty() || code != 0;
   if (mine) noteLocalFailure(error.empty() ? "failed" : error, code != 0 ? code : 3);
-  // One allreduce in the common case: the lowest failing rank and the largest signal.
-  int in[2] = {mine ? me : size, -signal}, out[2] = {size, 0};
-  MPI_Allreduce(in, out, 2, MPI_INT, MPI_MIN, comm_.raw());
+  // One allreduce in the common case: the lowest failing rank, the largest signal and request.
+  int in[3] = {mine ? me : size, -signal, -request}, out[3] = {size, 0, 0};
+  MPI_Allreduce(in, out, 3, MPI_INT, MPI_MIN, comm_.raw());
   Verdict v;
   v.signal = -out[1];
+  v.request = -out[2];
   if (out[0] == size) return v;
   v.rank = out[0];
   v.failing = comm_.sum(mine ? 1 : 0);

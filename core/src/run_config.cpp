@@ -23,8 +23,22 @@ void declareRunConfig(Schema& s) {
            "memory a rank may use (GiB), checked against the estimate before anything large is "
            "allocated; 0: the machine's MemAvailable shared by the ranks on the node",
            Range::nonNegative());
-  s.number("run.progress_interval_s", 2.0, "seconds between progress lines on rank 0 (0: off)",
+  s.number("run.progress_interval_s", 2.0,
+           "seconds of rank 0's wall clock between progress rows (run.progress_columns); the "
+           "first and the last step always get one (0: no progress table)",
            Range::nonNegative());
+  s.nameList("run.progress_columns",
+             {"step", "time", "dt", "ke", "cfl", "p_iter", "steps_per_s", "left"},
+             "the columns of the progress table (LAMMPS's thermo_style; a list, or names "
+             "separated by commas): step, time (s), dt (s, of the last step), particles "
+             "(global count), ke (translational kinetic energy of the particles, J), contacts "
+             "(particle-particle contacts per particle), cfl (the fluid's CFL number of the "
+             "last step), p_iter (pressure iterations of the last solve), p_iter_avg (per "
+             "solve over the run), dp (rho_f (p_bottom - p_top) between the lowest and the "
+             "highest layer of cells along gravity, Pa), wall_per_step (s, since the last "
+             "row), steps_per_s (over this run), left (estimated wall seconds to the end); "
+             "'-' where the run has no such value (docs/output.md)",
+             progressColumnNames());
   s.boolean("run.timer_sync", false,
             "timed barriers before the fluid's halo after the momentum predictor and before "
             "the DEM's rebuild vote in every sub-step: a rank's wait for the slowest one is "
@@ -35,6 +49,13 @@ void declareRunConfig(Schema& s) {
            "error check; past it, it prints its message and stops every rank (MPI_Abort), so "
            "no failure hangs (docs/robustness.md); at most 1e6 s",
            Range::openClosed(0.0, 1e6));
+}
+
+const std::vector<std::string>& progressColumnNames() {
+  static const std::vector<std::string> names = {
+      "step",   "time",       "dt", "particles",     "ke",          "contacts", "cfl",
+      "p_iter", "p_iter_avg", "dp", "wall_per_step", "steps_per_s", "left"};
+  return names;
 }
 
 RunMode runMode(const Config& cfg) {

@@ -128,3 +128,35 @@ TEST(Config, NumbersPastTheirTypeDuplicatesAndOverflow) {
   EXPECT_EQ(errorOf("{" + base + "}", {"fluid.nu=1e400"}),
             "fluid.nu: expected a number, got a string");
 }
+
+TEST(Config, NameLists) {
+  Schema s;
+  s.nameList("run.columns", {"a", "b"}, "columns", {"a", "b", "c"});
+  auto names = [&](const std::string& text, std::vector<std::string> over = {}) {
+    return Config::fromText(text, "case.json", over, s).names("run.columns");
+  };
+  auto error = [&](const std::string& text, std::vector<std::string> over = {}) {
+    try {
+      Config::fromText(text, "case.json", over, s);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(names("{}"), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(names(R"({ "run": { "columns": ["c", "a", "c"] } })"),
+            (std::vector<std::string>{"c", "a", "c"}));
+  // --set: a JSON list, or one string of names separated by commas and spaces
+  EXPECT_EQ(names("{}", {"run.columns=c, b"}), (std::vector<std::string>{"c", "b"}));
+  EXPECT_EQ(names("{}", {R"(run.columns=["b"])"}), (std::vector<std::string>{"b"}));
+  EXPECT_EQ(error("{}", {"run.columns=a,x"}),
+            "run.columns: unknown name 'x', expected some of: a, b, c");
+  EXPECT_EQ(error(R"({ "run": { "columns": [] } })"),
+            "run.columns: no names given, expected some of: a, b, c");
+  EXPECT_EQ(error(R"({ "run": { "columns": ["a", 1] } })"),
+            "run.columns[1]: expected a name (a string), got an integer");
+  EXPECT_EQ(error(R"({ "run": { "columns": 1 } })"),
+            "run.columns: expected a list of names (or one string of names separated by commas), "
+            "got an integer");
+  EXPECT_NE(s.describe().find("each one of a b c"), std::string::npos);
+}

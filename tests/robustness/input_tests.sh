@@ -20,11 +20,18 @@
 #                     host, cores online, the rank count, oversubscribed exactly when a node has
 #                     more ranks than cores, the source tree's git commit, the version of the top
 #                     CMakeLists.txt, the MPI / hypre / HDF5 versions, the command line)
-#   log               OUT/log.txt holds what rank 0 prints, progress lines included (also with
+#   log               OUT/log.txt holds what rank 0 prints, the progress table included (also with
 #                     --quiet, which keeps the phase table off the terminal only); the phase
 #                     table's rows and sums are report.json's timers and run.wall_s; the figure of
 #                     merit line is report.json's figure_of_merit, throughput over the cores used;
-#                     a restart continuing in its folder appends to the log
+#                     a restart continuing in its folder appends to the log, the table's header
+#                     again after its note
+#   progress          the progress table (run.progress_columns, every column): one header, a row
+#                     every step (run.progress_interval_s = 1e-9) from step 0; the last row against
+#                     report.json (particles, contacts, time, dt, cfl, p_iter, dp); the same rows
+#                     on 1 and 2 ranks (coupled and particles-only: integers exact, values to
+#                     the last digit printed, 1e-6 relative for 7 digits); '-' for what the mode
+#                     has not; an unknown column refused (exit 2) naming run.progress_columns
 #   pressure_max_iter fluid.pressure.max_iter = 1: a warning and fluid.unconverged_solves; with
 #                     fluid.pressure.on_no_convergence = error: exit 3 naming the key
 set -u
@@ -222,8 +229,12 @@ PYEOF
       --set run.progress_interval_s=1e-9 --set output.checkpoint_interval=2
     expect 0 "report written"
     [[ -f $work/a/log.txt ]] || fail "no log.txt"
-    n=$(grep -c "^coloc: step [0-9]*/4 " "$log")
-    [[ $n -eq 4 ]] || fail "$n progress lines on the terminal, expected 4"
+    # the default columns: a header, then a row for step 0 and for each of the 4 steps
+    header="^ \+step \+time \+dt \+ke \+cfl \+p_iter \+steps_per_s \+left$"
+    n=$(grep -c "$header" "$log")
+    [[ $n -eq 1 ]] || fail "$n progress headers on the terminal, expected 1"
+    n=$(grep -c "^ \+[0-4] " "$log")
+    [[ $n -eq 5 ]] || fail "$n progress rows on the terminal, expected 5 (steps 0-4)"
     while IFS= read -r line; do
       grep -qxF -- "$line" "$work/a/log.txt" || fail "not in log.txt: $line"
     done < "$log"
@@ -281,9 +292,105 @@ PYEOF
     run more "${two[@]}" "$coloc" run "$bed" --out "$work/a" --set run.steps=6 \
       --set run.progress_interval_s=1e-9 --restart "$work/a/checkpoint.h5"
     expect 0 "report written"
-    grep -q "^coloc: step 2/4 " "$work/a/log.txt" || fail "the restart dropped the earlier log"
+    grep -q "^ \+2 " "$work/a/log.txt" || fail "the restart dropped the earlier log"
     grep -q "^coloc: ---- the run continues (--restart) ----" "$work/a/log.txt" || fail "no mark"
-    grep -q "^coloc: step 6/6 " "$work/a/log.txt" || fail "the restart's progress is not logged"
+    # after the mark and the restart's note: the header again, rows from step 4 (the checkpoint's)
+    sed -n '/^coloc: ---- the run continues/,$p' "$work/a/log.txt" > "$work/more.txt"
+    [[ $(grep -c "$header" "$work/more.txt") -eq 1 ]] || fail "no header after the restart"
+    note=$(grep -n "^coloc: restarted from" "$work/more.txt" | cut -d: -f1)
+    at=$(grep -n "$header" "$work/more.txt" | cut -d: -f1)
+    [[ -n $note && $at -gt $note ]] || fail "the header does not follow the restart's note"
+    [[ $(grep -c "^ \+[4-6] " "$work/more.txt") -eq 3 ]] ||
+      fail "the restart's rows are not steps 4, 5, 6"
+    ;;
+  progress)
+    cols=step,time,dt,particles,ke,contacts,cfl,p_iter,p_iter_avg,dp,wall_per_step,steps_per_s,left
+    for np in 1 2; do
+      run "np$np" "$mpiexec" -n $np --bind-to none "$coloc" run "$bed" --out "$work/np$np" \
+        --set run.steps=5 --set run.progress_interval_s=1e-9 --set "run.progress_columns=$cols"
+      expect 0 "report written"
+    done
+    # particles only, and fluid only: what the mode has not is '-'
+    for np in 1 2; do
+      run "dem$np" "$mpiexec" -n $np --bind-to none "$coloc" run "$bed" --out "$work/dem$np" \
+        --set run.mode=particles --set run.steps=5 --set run.progress_interval_s=1e-9 \
+        --set "run.progress_columns=step particles ke contacts cfl p_iter dp"
+      expect 0 "report written"
+    done
+    run fluid "${two[@]}" "$coloc" run "$bed" --out "$work/fluid" --set run.mode=fluid \
+      --set run.steps=3 --set run.progress_interval_s=1e-9 \
+      --set 'run.progress_columns=["step","particles","ke","contacts","cfl","p_iter","dp"]'
+    expect 0 "report written"
+    "$py" - "$work" "$cols" <<'PYEOF' || fail "the progress tables"
+import json, sys
+work, cols = sys.argv[1], sys.argv[2].split(",")
+def table(folder, names):
+    lines = open(f"{work}/{folder}/log.txt").read().splitlines()
+    heads = [i for i, l in enumerate(lines) if l.split() == names]
+    assert len(heads) == 1, (folder, "headers", heads)
+    rows = []
+    for l in lines[heads[0] + 1:]:
+        f = l.split()
+        if len(f) != len(names) or not f[0].isdigit() or not l.startswith(" "):
+            continue
+        rows.append(dict(zip(names, f)))
+    assert [int(r["step"]) for r in rows] == list(range(len(rows))), (folder, rows)
+    return rows, json.load(open(f"{work}/{folder}/report.json"))
+def close(a, b, rel=1e-6, abs_=0.0):
+    return abs(a - b) <= rel * max(abs(a), abs(b)) + abs_
+every = {}
+for np in (1, 2):
+    rows, d = table(f"np{np}", cols)
+    assert len(rows) == 6, (np, len(rows))
+    first, last = rows[0], rows[-1]
+    for c in ("dt", "cfl", "p_iter", "p_iter_avg", "wall_per_step", "steps_per_s", "left"):
+        assert first[c] == "-", (np, c, first)
+    assert all(v != "-" for r in rows[1:] for v in r.values()), (np, rows)
+    assert float(last["left"]) == 0, last
+    assert int(last["step"]) == d["run"]["steps"] == 5
+    assert int(last["particles"]) == d["particles"]["count"] == 400, (last, d["particles"]["count"])
+    assert close(float(last["contacts"]), d["particles"]["contacts_per_particle"], 1e-4), last
+    assert close(float(last["time"]), d["run"]["sim_time"]), last
+    assert close(float(last["dt"]), d["fluid"]["dt_last"], 1e-3), last
+    assert close(float(last["cfl"]), d["fluid"]["cfl_last"], 1e-3), last
+    assert int(last["p_iter"]) == d["pressure"]["iterations_last"], last
+    assert close(float(last["p_iter_avg"]), d["pressure"]["iterations_avg"], 1e-3), last
+    assert close(float(last["dp"]), d["bed"]["dp_box_pa"], 1e-6, 1e-9), (last, d["bed"])
+    assert float(rows[0]["ke"]) == 0 and all(float(r["ke"]) > 0 for r in rows[1:]), rows
+    every[np] = rows
+    print(f"np{np}: 6 rows; last", " ".join(last[c] for c in cols))
+# to the last digit printed: 7 significant digits, 4 for dt, cfl, p_iter_avg, 5 for contacts
+digits = {"dt": 4, "cfl": 4, "p_iter_avg": 4, "contacts": 5}
+def same(a, b, names, ints):
+    assert len(a) == len(b), (len(a), len(b))
+    for ra, rb in zip(a, b):
+        for c in names:
+            if c in ints:
+                assert ra[c] == rb[c], (c, ra, rb)
+            elif ra[c] == "-" or rb[c] == "-":
+                assert ra[c] == rb[c], (c, ra, rb)
+            else:
+                rel = 10.0 ** (1 - digits.get(c, 7))
+                assert close(float(ra[c]), float(rb[c]), rel, 1e-300), (c, ra, rb)
+same(every[1], every[2], cols[:10], {"step", "particles", "p_iter"})
+dem = "step particles ke contacts cfl p_iter dp".split()
+d1, _ = table("dem1", dem)
+d2, _ = table("dem2", dem)
+same(d1, d2, dem, {"step", "particles"})
+assert all(r[c] == "-" for r in d1 for c in ("cfl", "p_iter", "dp")), d1
+assert all(r["particles"] == "400" for r in d1), d1
+fl, _ = table("fluid", dem)
+assert len(fl) == 4, fl
+assert all(r[c] == "-" for r in fl for c in ("particles", "ke", "contacts")), fl
+assert all(r[c] != "-" for r in fl[1:] for c in ("cfl", "p_iter", "dp")), fl
+print("1 and 2 ranks agree; particles-only and fluid-only rows as expected")
+PYEOF
+    # an unknown column: refused before the run, naming the key, the name and the valid ones
+    run bad "${two[@]}" "$coloc" run "$bed" --out "$work/bad" --set run.progress_columns=step,kinetic
+    expect 2 "run.progress_columns: unknown name 'kinetic', expected some of: step, time, dt,"
+    [[ -e $work/bad ]] && fail "the refused run made its folder"
+    run keys "$coloc" keys run
+    expect 0 "run.progress_columns  (a list of names, default [\"step\",\"time\",\"dt\",\"ke\""
     ;;
   *) fail "unknown test $test" ;;
 esac

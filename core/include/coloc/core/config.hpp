@@ -45,7 +45,18 @@ struct Range {
   std::string describe() const;
 };
 
-enum class KeyKind { Number, Integer, Boolean, String, Vec3, IntVec3, NumberList, Object, List };
+enum class KeyKind {
+  Number,
+  Integer,
+  Boolean,
+  String,
+  Vec3,
+  IntVec3,
+  NumberList,
+  NameList,
+  Object,
+  List
+};
 
 class Schema;
 
@@ -76,6 +87,11 @@ class Schema {
                   const std::string& help, Range r = Range::any());
   Schema& numberList(const std::string& path, std::optional<std::vector<double>> def,
                      const std::string& help, Range r = Range::any());
+  /// A non-empty list of names, each one of `choices`: a JSON list of strings, or one string of
+  /// names separated by commas or spaces (`--set run.progress_columns=step,time`). Resolved to
+  /// the list.
+  Schema& nameList(const std::string& path, std::vector<std::string> def, const std::string& help,
+                   std::vector<std::string> choices);
   /// An optional object whose keys depend on its "type" (e.g. a boundary condition).
   Schema& variant(const std::string& path, std::map<std::string, Schema> byType,
                   const std::string& defaultType, const std::string& help);
@@ -127,6 +143,7 @@ class Config {
   std::string string(const std::string& path) const { return at(path).get<std::string>(); }
   std::array<double, 3> vec3(const std::string& path) const;
   std::array<long long, 3> intVec3(const std::string& path) const;
+  std::vector<std::string> names(const std::string& path) const;
 
  private:
   Json json_;

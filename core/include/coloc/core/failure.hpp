@@ -72,13 +72,17 @@ class FailureChannel {
     int failing = 0;  // how many ranks failed
     int signal = 0;   // the largest stop signal any rank has received (0: none)
     int where = 0;    // the caller's label of the part that failed, from the lowest failing rank
+    int request = 0;  // the largest request any rank passed (0: none)
     std::string message;  // its message; "rank R: " before it unless every rank failed
     bool failed() const { return code != 0; }
   };
   /// Collective: every rank passes its own failure ("" and 0 when it has none), the stop
   /// signal it has seen and a label of where it failed. A failing rank arms the deadline first;
-  /// the verdict disarms it.
-  Verdict agree(const std::string& error, int code, int signal = 0, int where = 0) const;
+  /// the verdict disarms it. `request` (>= 0) rides on the same allreduce: a flag one rank
+  /// raises for all (the driver's "progress line on the next step", decided by rank 0's clock);
+  /// the verdict carries the largest over the ranks, at no extra cost.
+  Verdict agree(const std::string& error, int code, int signal = 0, int where = 0,
+                int request = 0) const;
   const Comm& comm() const { return comm_; }
 
  private:
