@@ -3,7 +3,7 @@
 velocity is decreased step by step from a stable spout until the spout collapses (U_ms is the
 velocity at which spouting stops on decreasing flow), and compared with Mathur-Gishler.
 
-    bench/scripts/spout_onset.py                                  # 1 rank, -> ./out/spout-onset/
+    bench/scripts/spout_onset.py              # 1 rank, -> ./out/spout-onset/ (~2 min on the 2-core VM)
     bench/scripts/spout_onset.py --ranks 2 --velocities 25 20 15 12.5 10 --level-steps 2000
     bench/scripts/spout_onset.py --reuse --min-fountain 1   # the same runs, another threshold
 
@@ -16,7 +16,8 @@ steps (output.particles, no fields).
 
 Criterion (the fountain): in each particle output, the annulus surface H_s is the 95th percentile
 of the centre heights of the particles in the outer half of the bed (|x - x_jet| > W/4, W the
-width along the slot's narrow axis); the fountain is the particles of the central half
+box's width along x; the script assumes gravity along -z, the jet an inlet patch on zlo and the
+bed spread along x, as in the case); the fountain is the particles of the central half
 (|x - x_jet| < W/4) whose centres are more than --above (default 4 diameters) above H_s. A level
 spouts when the fountain holds at least --min-fountain particles (default 10) in every output of
 the level's second half (the first half is left to the bed to adjust): a steady fountain, not one
@@ -208,6 +209,9 @@ def main():
             wall = time.time() - t0
         outs = level_outputs(folder, first)
         late = [p for s, p in outs if s > first + (steps - first) / 2]
+        if not late:
+            sys.exit("spout_onset.py: %s has no particle output in the level's second half "
+                     "(--every %d, %d steps)" % (folder, args.every, steps - first))
         vals = [fountain(p, geo, d_p, args.above) for p in late]
         mean_f = sum(v[0] for v in vals) / len(vals)
         row = {"u_jet": u, "u_column": u * area_ratio, "fountain": mean_f,
