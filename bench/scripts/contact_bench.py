@@ -27,6 +27,10 @@ import json
 import os
 import shlex
 import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mpi_env import mpi_env  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -34,11 +38,7 @@ PAPER = "92 / < 8 / < 0.1"  # case 3: DEM / fluid + coupling / inter-physics, % 
 
 
 def env():
-    return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                OMPI_MCA_rmaps_base_oversubscribe="1",
-                OMPI_MCA_mpi_yield_when_idle=os.environ.get("OMPI_MCA_mpi_yield_when_idle", "1"),
-                OMPI_MCA_btl_vader_single_copy_mechanism=os.environ.get(
-                    "OMPI_MCA_btl_vader_single_copy_mechanism", "none"))
+    return mpi_env()
 
 
 def run(args, n, extra, out):
