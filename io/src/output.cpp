@@ -101,13 +101,19 @@ std::string OutputWriter::writeFields(long long step, double time,
   if (!opt_.fields) return {};
   std::set<std::string> names;
   for (const auto& f : fields) {
-    if (f.name.empty() || f.name.find('/') != std::string::npos || !names.insert(f.name).second)
-      throw Error("output field name '" + f.name + "': must be non-empty, unique, without '/'");
+    if (f.name.empty() || f.name.find('/') != std::string::npos || f.name == "rank" ||
+        !names.insert(f.name).second)
+      throw Error("output field name '" + f.name +
+                  "': must be non-empty, unique, without '/', not 'rank'");
     if (!f.c[0] || (f.isVector() && !f.c[2]))
       throw Error("output field '" + f.name + "': missing component");
   }
   ensureDir();
   const Decomposition& dec = *dec_;
+  if (rank_.layout().n != dec.cells() || rank_.data().empty())
+    rank_ = CellField(FieldLayout{dec.cells(), 0, {0, 0, 0}}, double(dec.comm().rank()));
+  std::vector<OutputField> all = fields;
+  all.push_back(OutputField::scalar("rank", rank_, "1"));
   const std::string name = fileName("fields", step);
   const std::string path = (std::filesystem::path(opt_.dir) / name).string();
   XdmfStep entry;
@@ -126,7 +132,7 @@ std::string OutputWriter::writeFields(long long step, double time,
     file.setAttribute("/", "spacing", std::span<const double>(spacing));
     file.setAttribute("/", "cells", std::span<const double>(cells));
     file.setAttribute("/", "length_units", "m");
-    for (const auto& f : fields) {
+    for (const auto& f : all) {
       const std::string ds = "/" + f.name;
       if (f.isVector())
         writeCellVector(file, ds, dec, *f.c[0], *f.c[1], *f.c[2]);

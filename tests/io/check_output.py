@@ -87,7 +87,7 @@ def attribute_items(grid, center):
     return out
 
 
-def check_fields(d):
+def check_fields(d, ranks):
     xmf = os.path.join(d, "fields.xmf")
     nx, ny, nz = CELLS
     i = np.arange(nx)[None, None, :]
@@ -106,7 +106,14 @@ def check_fields(d):
         check(np.allclose(o, ORIGIN[::-1], rtol=0, atol=1e-14), f"fields: origin {o} (z y x)")
         check(np.allclose(s, SPACING[::-1], rtol=0, atol=1e-14), f"fields: spacing {s} (z y x)")
         attrs = attribute_items(g, "Cell")
-        check(set(attrs) == {"p", "u"}, f"fields: attributes {sorted(attrs)}")
+        check(set(attrs) == {"p", "u", "rank"}, f"fields: attributes {sorted(attrs)}")
+        kind, item = attrs["rank"]
+        owner = resolve(d, item)
+        check(kind == "Scalar", "rank: not Scalar")
+        if owner is not None:
+            o = owner[...]
+            check(set(np.unique(o).tolist()) == set(float(r) for r in range(ranks)),
+                  f"rank at step {step}: owners {np.unique(o).tolist()}, {ranks} ranks")
         kind, item = attrs["p"]
         p = resolve(d, item)
         check(kind == "Scalar", "p: not Scalar")
@@ -167,7 +174,7 @@ def main():
     if len(sys.argv) != 3:
         sys.exit("usage: check_output.py DIR RANKS")
     d, ranks = sys.argv[1], int(sys.argv[2])
-    check_fields(d)
+    check_fields(d, ranks)
     check_particles(d, ranks)
     leftovers = [f for f in os.listdir(d) if f.endswith(".tmp")]
     check(not leftovers, f"temporary files left: {leftovers}")

@@ -513,6 +513,7 @@ TEST(H5Io, OutputWriterSeries) {
   }
   EXPECT_THROW(out.writeFields(6, 0.0, {OutputField::scalar("p", p), OutputField::scalar("p", p)}),
                Error);
+  EXPECT_THROW(out.writeFields(6, 0.0, {OutputField::scalar("rank", p)}), Error);
   EXPECT_EQ(out.fieldSeries().steps().size(), 2u);
   EXPECT_EQ(out.particleSeries().steps().back().count,
             static_cast<long long>(globalRows(w.size()).size()));
@@ -527,6 +528,17 @@ TEST(H5Io, OutputWriterSeries) {
   readCellField(f, "/p", dec, back);
   EXPECT_EQ(countCellMismatches(dec, back), 0);
   EXPECT_EQ(f.attributeString("/p", "units"), "m^2/s^2");
+  {
+    // /rank: the writer's own field, the owner of every cell (the partition in ParaView).
+    CellField owner(cellLayout(dec, 1), -1.0);
+    readCellField(f, "/rank", dec, owner);
+    long long wrong = 0;
+    forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
+      wrong += owner(i, j, k) != static_cast<double>(w.rank());
+    });
+    EXPECT_EQ(wrong, 0);
+    EXPECT_EQ(f.attributeString("/rank", "units"), "1");
+  }
   EXPECT_EQ(f.attributeString("/u", "units"), "m/s");
   EXPECT_EQ(f.attributeString("/", "time_units"), "s");
   {

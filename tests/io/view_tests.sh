@@ -165,7 +165,7 @@ for t in p.TimestepValues:
 assert len(p.TimestepValues) == 3, p.TimestepValues
 for a in ("v", "radius", "id", "rank"):
     assert a in p.PointData.keys(), a
-for a in ("eps", "u", "p", "K"):
+for a in ("eps", "u", "p", "K", "rank"):
     assert a in f.CellData.keys(), a
 print("PASS: the default reader gives 400 vertex cells and 256 field cells at",
       list(p.TimestepValues))

@@ -87,7 +87,9 @@ class OutputWriter {
   bool due(long long step) const;
 
   /// Writes DIR/fields_NNNNNN.h5 and rewrites DIR/fields.xmf; returns the .h5 path. Does
-  /// nothing (returns "") when options().fields is false. Names: non-empty, no '/', unique.
+  /// nothing (returns "") when options().fields is false. Names: non-empty, no '/', unique, not
+  /// "rank": the writer adds /rank, the rank that owns each cell (ParaView colours the partition
+  /// by it, as by vtkProcessId).
   std::string writeFields(long long step, double time, const std::vector<OutputField>& fields);
 
   /// Writes this rank's particles (all spans of one length, e.g. the owned particles) to
@@ -110,6 +112,7 @@ class OutputWriter {
   OutputOptions opt_;
   bool dirReady_ = false;
   XdmfSeries fieldSeries_, particleSeries_;
+  CellField rank_;  // this rank's number on its cells (rebuilt when its block changes)
 };
 
 }  // namespace coloc
