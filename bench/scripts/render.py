@@ -229,7 +229,7 @@ def main():
     report = os.path.join(out, "report.json")
     if not args.no_ranks and os.path.exists(report):
         f = os.path.join(png_dir, "render_ranks.png")
-        if draw_ranks(report, parts, nparts, t, stamp, args.size, view, title, f):
+        if draw_ranks(report, sl, parts, nparts, t, stamp, args.size, view, title, f):
             written.append(f)
     for f in written:
         print("render.py: wrote %s" % f)
@@ -268,7 +268,7 @@ def rgb(hexcolour):
     return [int(hexcolour[i:i + 2], 16) / 255.0 for i in (1, 3, 5)]
 
 
-def draw_ranks(report, parts, nparts, t, stamp, size, view, title, png):
+def draw_ranks(report, plane, parts, nparts, t, stamp, size, view, title, png):
     """render_ranks.png: the blocks of report.json's partition.boxes as outlines in their rank's
     colour, the particles coloured by their rank. False (with a message) when the report has no
     boxes (a report from before they were written)."""
@@ -297,17 +297,22 @@ def draw_ranks(report, parts, nparts, t, stamp, size, view, title, png):
         if r < len(boxes) and b == boxes[r]:
             continue
         outline(v, *phys(b), [0, 0, 0], 1.0)
+    lut = GetColorTransferFunction("rank")  # one colour a rank, tab20 as snapshot.py's
+    lut.InterpretValuesAsCategories = 1
+    annotations, colours = [], []
+    for r in range(len(boxes)):
+        annotations += [str(r), "rank %d" % r]
+        colours += rgb(TAB20[r % 20])
+    lut.Annotations = annotations
+    lut.IndexedColors = colours
+    if "rank" in plane.CellData.keys():  # the mid-plane's cells by their owner (fields' /rank)
+        pl = Show(plane, v)
+        pl.Ambient, pl.Diffuse = 1.0, 0.0
+        ColorBy(pl, ("CELLS", "rank"))
+        pl.Opacity = 0.35
     if parts is not None and nparts > 0:
         pd = show_spheres(parts, v)
         ColorBy(pd, ("POINTS", "rank"))
-        lut = GetColorTransferFunction("rank")
-        lut.InterpretValuesAsCategories = 1
-        annotations, colours = [], []
-        for r in range(len(boxes)):
-            annotations += [str(r), "rank %d" % r]
-            colours += rgb(TAB20[r % 20])
-        lut.Annotations = annotations
-        lut.IndexedColors = colours
         if len(boxes) <= 20:  # a legend of the ranks' colours
             sb = GetScalarBar(lut, v)
             sb.Title = "rank"
@@ -317,7 +322,8 @@ def draw_ranks(report, parts, nparts, t, stamp, size, view, title, png):
             sb.WindowLocation = "Lower Right Corner"
             sb.Visibility = 1
     what = "%s, %d ranks" % (part.get("strategy", "?"), len(boxes))
-    title(v, "the partition (%s): blocks outlined, particles coloured by rank (%s)" % (what, stamp))
+    title(v, "the partition (%s): blocks outlined, mid-plane cells and particles coloured by rank (%s)"
+          % (what, stamp))
     # An oblique view: the vertical axis up, the camera off every axis.
     centre = [origin[d] + 0.5 * length[d] for d in range(3)]
     others = [d for d in range(3) if d != up]
