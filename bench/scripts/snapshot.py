@@ -2,13 +2,16 @@
 """A picture of a run without ParaView: DIR/snapshot.png from the last output of DIR.
 
     /usr/bin/python3 bench/scripts/snapshot.py OUT_DIR [--step N] [--png FILE] [--report FILE]
+                                                        [--full]
 
 Left: the fluid fraction eps on the mid-plane that contains the vertical (gravity) axis; right:
 the fluid speed |u| (m/s) on the same plane. The particles whose centres lie within one cell of
 the plane are drawn on both, to scale (their true radius), coloured by the rank that owns them on
 the left and by their speed on the right. The blocks of the partition (report.json
 partition.boxes: the fluid's block of every rank, process grid or tiled boxes) that the plane
-cuts are drawn on both as white lines, numbered by rank up to 64 ranks.
+cuts are drawn on both as white lines, numbered by rank up to 64 ranks. A bed under a tall
+freeboard (the particles below 70 % of the box height) is drawn up to a margin above its highest
+particle, said in the title; --full draws the whole box.
 Reads the files of docs/output.md with h5py (fields_NNNNNN.h5, particles_NNNNNN.h5) and the
 case's gravity from report.json when it is there (else: the longest axis is vertical). The coloc
 driver runs this at the end of a run that writes fields (key output.snapshot). Exit status 0
@@ -61,6 +64,9 @@ def main():
     ap.add_argument("--step", type=int, help="output step (default: the last one)")
     ap.add_argument("--png", help="output file (default: OUT_DIR/snapshot.png)")
     ap.add_argument("--report", help="the run's report.json (default: OUT_DIR/report.json)")
+    ap.add_argument("--full", action="store_true",
+                    help="the whole height of the box (default: cropped a margin above the "
+                         "highest particle when that leaves out more than 30 %% of the box)")
     args = ap.parse_args()
     try:
         import h5py
@@ -122,15 +128,26 @@ def main():
         ntotal = len(x)
 
     ext = [origin[horiz], origin[horiz] + length[horiz], origin[up], origin[up] + length[up]]
-    aspect = length[up] / length[horiz]
+    # Crop the empty freeboard: show up to a margin above the highest particle (a quarter of the
+    # particles' height, at least 4 cells) when that leaves out more than 30 % of the box (gravity
+    # along -up only; --full keeps the whole box).
+    top = ext[3]
+    if px is not None and ntotal and sign > 0 and not args.full:
+        hi, lo = float(x[:, up].max()), float(x[:, up].min())
+        want = hi + max(0.25 * (hi - lo), 4 * spacing[up])
+        if want < ext[2] + 0.7 * length[up]:
+            top = want
+    aspect = (top - ext[2]) / length[horiz]
     w = 4.0 if aspect > 1.5 else 6.0
-    fig, axes = plt.subplots(1, len(panels), figsize=(w * len(panels), min(9.0, w * aspect) + 2.2),
+    # the panels' axes keep the box's aspect: about 0.78 w wide each, plus titles and colour bars
+    fig, axes = plt.subplots(1, len(panels),
+                             figsize=(w * len(panels), max(4.0, min(9.0, 0.78 * w * aspect) + 2.4)),
                              squeeze=False, layout="constrained")
     names = "xyz"
     for ax, (title, img, cmap) in zip(axes[0], panels):
         im = ax.imshow(img, origin="lower" if sign > 0 else "upper", extent=ext, cmap=cmap,
                        interpolation="nearest", aspect="equal")
-        fig.colorbar(im, ax=ax, orientation="horizontal", shrink=0.9, pad=0.02, label=title)
+        fig.colorbar(im, ax=ax, orientation="horizontal", shrink=0.9, pad=0.04, label=title)
         if px is not None and len(px):
             speed_panel = title.startswith("fluid speed")
             nranks = max(len(boxes), int(prank.max()) + 1 if len(prank) else 1)
@@ -156,9 +173,11 @@ def main():
             hgt = (b[3 + up] - b[up]) * spacing[up]
             ax.add_patch(plt.Rectangle((x0, y0), wdt, hgt, fill=False, ec="white", lw=0.8,
                                        ls="--", alpha=0.9))
-            if len(boxes) <= 64:
-                ax.text(x0 + wdt / 2, y0 + hgt / 2, str(q), color="white", fontsize=7,
+            ylo, yhi = max(y0, ext[2]), min(y0 + hgt, top)  # the part in view (crop)
+            if len(boxes) <= 64 and ylo < yhi:
+                ax.text(x0 + wdt / 2, (ylo + yhi) / 2, str(q), color="white", fontsize=7,
                         ha="center", va="center", alpha=0.9)
+        ax.set_ylim(ext[2], top)
         ax.set_xlabel("%s (m)" % names[horiz])
         ax.tick_params(axis="x", labelrotation=30)
         ax.set_ylabel("%s (m), %s" % (names[up], "up" if sign > 0 else "down"))
@@ -168,6 +187,9 @@ def main():
                                             origin[normal] + (mid + 0.5) * spacing[normal], mid)
     if px is not None:
         sub += "; %d of %d particles within one cell of it, drawn to scale" % (len(px), ntotal)
+    if top < ext[3]:
+        sub += "\ncropped at %s = %.4g m, a margin above the highest particle (the box goes to " \
+            "%.4g m; --full shows it all)" % (names[up], top, ext[3])
     if len(boxes) > 1:
         sub += "\ndashed: the fluid's blocks of %d ranks (%s)%s" % (
             len(boxes), strategy, "; particles coloured by their rank (left)" if px is not None
@@ -179,8 +201,9 @@ def main():
     import provenance
     has = provenance.of_report(report) is not None
     provenance.stamp(fig, reports=[report] if has else [], data_files=[] if has else [fpath])
-    provenance.savefig(fig, png, dpi=110)
-    print("snapshot.py: wrote %s" % png)
+    provenance.savefig(fig, png, dpi=110, bbox_inches="tight", pad_inches=0.1)
+    print("snapshot.py: wrote %s%s" % (png, " (cropped at %s = %.4g m of %.4g m)" % (
+        names[up], top, ext[3]) if top < ext[3] else ""))
     return 0
 
 

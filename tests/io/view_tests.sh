@@ -107,6 +107,21 @@ assert a.shape[0] > 300 and a.shape[1] > 300, a.shape
 assert a[..., :3].std() > 0.05, "a blank picture"
 print("PASS: snapshot.png", a.shape)
 EOF
+  # the bed fills the lower 40 % of the tiny column: the picture is cropped above it, and --full
+  # draws the whole box, taller
+  "$py" "$scripts/snapshot.py" "$work/on" --png "$work/crop.png" > "$work/crop.log" 2>&1 ||
+    { cat "$work/crop.log"; fail "snapshot.py by hand"; }
+  grep -q "(cropped at z = " "$work/crop.log" || { cat "$work/crop.log"; fail "no crop above the bed"; }
+  "$py" "$scripts/snapshot.py" "$work/on" --png "$work/full.png" --full > "$work/full.log" 2>&1 ||
+    { cat "$work/full.log"; fail "snapshot.py --full"; }
+  grep -q "cropped" "$work/full.log" && fail "--full cropped"
+  "$py" - "$work/crop.png" "$work/full.png" <<'EOF' || fail "--full is not the taller picture"
+import sys
+import matplotlib.image as mi
+c, f = mi.imread(sys.argv[1]), mi.imread(sys.argv[2])
+print("cropped", c.shape, "full", f.shape)
+assert f.shape[0] / f.shape[1] > c.shape[0] / c.shape[1], (c.shape, f.shape)
+EOF
   run 1 "$work/off" --set output.interval_steps=5 --set output.snapshot=false
   [[ -e "$work/off/snapshot.png" ]] && fail "snapshot.png written with output.snapshot=false"
   run 1 "$work/none"
