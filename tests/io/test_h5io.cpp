@@ -533,9 +533,8 @@ TEST(H5Io, OutputWriterSeries) {
     CellField owner(cellLayout(dec, 1), -1.0);
     readCellField(f, "/rank", dec, owner);
     long long wrong = 0;
-    forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
-      wrong += owner(i, j, k) != static_cast<double>(w.rank());
-    });
+    forEach(IndexBox{{0, 0, 0}, dec.cells()},
+            [&](int i, int j, int k) { wrong += owner(i, j, k) != static_cast<double>(w.rank()); });
     EXPECT_EQ(wrong, 0);
     EXPECT_EQ(f.attributeString("/rank", "units"), "1");
   }
