@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "coloc/core/error.hpp"
+#include "coloc/io/xdmf.hpp"
 
 namespace coloc {
 namespace {
@@ -24,29 +25,6 @@ constexpr double kPanelHeightMax = 420;
 constexpr double kMargin = 40;     // around each panel: titles above, the axis below
 constexpr double kTitle = 44;      // two lines of title
 constexpr int kDensityBins = 100;  // at most this many grey cells along each in-plane axis
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string num(double v) {
   char b[32];
@@ -162,11 +140,11 @@ void writeLayoutSvg(const std::string& path, const GlobalGrid& g, const LayoutPl
     const LayoutDrawing& d = panels[p];
     const double ox = kMargin + static_cast<double>(p % columns) * cellW;
     const double oy = kTitle + static_cast<double>(p / columns) * cellH + 10;
-    o << "<g class=\"panel\" data-strategy=\"" << escape(d.strategy) << "\" data-ranks=\""
+    o << "<g class=\"panel\" data-strategy=\"" << xmlEscape(d.strategy) << "\" data-ranks=\""
       << d.fluid.size() << "\" transform=\"translate(" << num(ox) << "," << num(oy) << ")\">\n";
     o << "<text x=\"0\" y=\"-26\" font-size=\"15\" font-weight=\"bold\">"
-      << escape((d.chosen ? "* " : "") + d.strategy) << "</text>\n"
-      << "<text x=\"0\" y=\"-9\" font-size=\"11\">" << escape(d.summary) << "</text>\n";
+      << xmlEscape((d.chosen ? "* " : "") + d.strategy) << "</text>\n"
+      << "<text x=\"0\" y=\"-9\" font-size=\"11\">" << xmlEscape(d.summary) << "</text>\n";
     o << "<use xlink:href=\"#density\" href=\"#density\"/>\n";
     // Each rank's fluid block where the plane cuts it.
     for (std::size_t r = 0; r < d.fluid.size(); ++r) {
@@ -203,12 +181,12 @@ void writeLayoutSvg(const std::string& path, const GlobalGrid& g, const LayoutPl
     char t[160];
     std::snprintf(t, sizeof t, "%s: %g .. %g m (%d cells)",
                   std::string(1, names[plane.across]).c_str(), lo[0], hi[0], f.nx);
-    o << "<text x=\"0\" y=\"" << num(f.h + 15) << "\" font-size=\"10\">" << escape(t)
+    o << "<text x=\"0\" y=\"" << num(f.h + 15) << "\" font-size=\"10\">" << xmlEscape(t)
       << "</text>\n";
     std::snprintf(t, sizeof t, "%s: %g .. %g m (%d cells), up %s",
                   std::string(1, names[plane.up]).c_str(), lo[1], hi[1], f.ny,
                   plane.upIsPlus ? "+" : "-");
-    o << "<text x=\"0\" y=\"" << num(f.h + 28) << "\" font-size=\"10\">" << escape(t)
+    o << "<text x=\"0\" y=\"" << num(f.h + 28) << "\" font-size=\"10\">" << xmlEscape(t)
       << "</text>\n";
     o << "</g>\n";
   }
@@ -219,10 +197,10 @@ void writeLayoutSvg(const std::string& path, const GlobalGrid& g, const LayoutPl
                 "along %c.",
                 names[plane.normal], sliceLo, sliceLo + g.spacing(plane.normal), plane.slice,
                 g.cells[plane.normal], names[plane.normal]);
-  o << "<text x=\"10\" y=\"" << num(height - 30) << "\" font-size=\"11\">" << escape(where)
+  o << "<text x=\"10\" y=\"" << num(height - 30) << "\" font-size=\"11\">" << xmlEscape(where)
     << "</text>\n"
     << "<text class=\"stamp\" x=\"10\" y=\"" << num(height - 12) << "\" font-size=\"10\" "
-    << "fill=\"#666\">" << escape(caption) << "</text>\n"
+    << "fill=\"#666\">" << xmlEscape(caption) << "</text>\n"
     << "</svg>\n";
 
   const std::string tmp = path + ".tmp";

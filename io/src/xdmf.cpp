@@ -19,6 +19,25 @@ using h5::ioReason;
 
 // ---- XDMF ---------------------------------------------------------------------------------------
 
+// Shortest text that reads back as exactly v (0.005, not 0.0050000000000000001).
+std::string num(double v) {
+  char b[32];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
+// A time as ParaView's time controls should show it: 12 significant digits, so that the round-off
+// of a time summed step by step goes (0.1, not 0.10000000000000007; 1.25, not 1.2499999999999731).
+// Steps closer than 1e-12 of the time apart would share a label, far below any dt coloc takes.
+// The HDF5 files keep the exact time (their "time" attribute).
+std::string timeText(double t) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.12g", t);
+  return b;
+}
+
+}  // namespace
+
 std::string xmlEscape(const std::string& s) {
   std::string o;
   for (char c : s) {
@@ -44,25 +63,6 @@ std::string xmlEscape(const std::string& s) {
   }
   return o;
 }
-
-// Shortest text that reads back as exactly v (0.005, not 0.0050000000000000001).
-std::string num(double v) {
-  char b[32];
-  const auto r = std::to_chars(b, b + sizeof b, v);
-  return std::string(b, r.ptr);
-}
-
-// A time as ParaView's time controls should show it: 12 significant digits, so that the round-off
-// of a time summed step by step goes (0.1, not 0.10000000000000007; 1.25, not 1.2499999999999731).
-// Steps closer than 1e-12 of the time apart would share a label, far below any dt coloc takes.
-// The HDF5 files keep the exact time (their "time" attribute).
-std::string timeText(double t) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.12g", t);
-  return b;
-}
-
-}  // namespace
 
 // ---- XDMF ---------------------------------------------------------------------------------------
 

@@ -11,6 +11,9 @@
 
 namespace coloc {
 
+/// `s` as XML text or attribute value: & < > " ' as entities.
+std::string xmlEscape(const std::string& s);
+
 struct XdmfAttribute {
   std::string name;
   bool vector = false;               // 3 components (last dataset axis)
