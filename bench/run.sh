@@ -5,7 +5,9 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${COLOC_BUILD_DIR:-$root/build}
-"$root/cmake/setup.sh" "$build"
+# Only the coloc binary: the tests and microbenchmarks are built by tests/run.sh, in the same
+# configuration (cmake/setup.sh), so nothing built here is compiled again there.
+COLOC_BUILD_TARGETS=coloc "$root/cmake/setup.sh" "$build"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none
 export OMPI_MCA_mpi_yield_when_idle=${OMPI_MCA_mpi_yield_when_idle:-1}  # ranks may share cores (README)

@@ -2,6 +2,11 @@
 # cmake/setup.sh [BUILD_DIR] [extra cmake args...]
 # Installs the Debian packages coloc needs (only those missing; clang-format for the style check of
 # tests/run.sh), then configures and builds.
+# COLOC_BUILD_TARGETS="coloc ..." builds only those targets (bench/run.sh: the coloc binary alone);
+# unset, everything (the tests and microbenchmarks too).
+# A new folder is configured as tests/run.sh wants it (warnings as errors, -DCOLOC_WERROR=ON), so
+# that bench/run.sh then tests/run.sh on a fresh machine share one configuration and compile nothing
+# twice; an explicit -DCOLOC_WERROR=OFF among the arguments wins.
 # Idempotent: with everything installed and built it takes a few seconds.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -30,7 +35,9 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 # Configure a new build folder; an existing one only when options are given (e.g. tests/run.sh's
 # -DCOLOC_WERROR=ON), which then stay in its cache.
 if [[ ! -f $build/build.ninja || $# -gt 0 ]]; then
-  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCOLOC_WERROR=ON \
         -DPython3_EXECUTABLE=/usr/bin/python3 "$@" >/dev/null
 fi
-cmake --build "$build" -j "$(nproc)"
+targets=()
+for t in ${COLOC_BUILD_TARGETS:-}; do targets+=(--target "$t"); done
+cmake --build "$build" -j "$(nproc)" "${targets[@]}"
