@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "coloc/core/error.hpp"
+#include "coloc/coupling/drag.hpp"
 #include "coloc/coupling/self_velocity.hpp"
 #include "coupled_util.hpp"
 

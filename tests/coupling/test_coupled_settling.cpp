@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "coloc/coupling/drag.hpp"
 #include "coupled_util.hpp"
 
 using namespace coloc;

@@ -57,10 +57,7 @@
 #include "coloc/core/run_config.hpp"
 #include "coloc/core/timers.hpp"
 #include "coloc/coupling/checkpoint.hpp"
-#include "coloc/coupling/drag.hpp"
-#include "coloc/coupling/kernel.hpp"
 #include "coloc/coupling/layouts.hpp"
-#include "coloc/coupling/self_velocity.hpp"
 #include "coloc/coupling/transfer.hpp"
 #include "coloc/dem/dem.hpp"
 #include "coloc/fv/fluid.hpp"
@@ -71,6 +68,8 @@
 #include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {
+
+class ParticleCoupling;
 
 /// Declares the "coupling.*" keys.
 void declareConfig(Schema& s);
@@ -171,23 +170,9 @@ class Simulation {
   /// The 7 fields the drag samples (eps, u, grad p; smoothed copies with coupling.smoothing).
   using DragFields = std::array<const CellField*, 7>;
   DragFields fluidForDrag();
-  /// Range by range (kSampleChunk particles): the fields sampled at them (none at set-up:
-  /// fields null), then the drag law and the particles' response.
+  /// The fields sampled at the particles, the drag law and the particles' response
+  /// (ParticleCoupling; none sampled at set-up: fields null).
   void evaluateDrag(double dt, const DragFields* fields);
-  /// The drag on particles first .. first + count - 1.
-  void evaluateDragOn(std::size_t first, std::size_t count, double dt, std::string& err);
-  /// Particle i's implicit response to its drag coefficient beta (the law's value at eps, slip);
-  /// `still`: it cannot move (frozen particles, or dt <= 0); `self`: with the correction.
-  void respondToDrag(std::size_t i, double eps, double slip, double beta, double dt, bool still,
-                     bool self, std::string& err);
-  /// coupling.self_velocity: beta re-evaluated at the undisturbed slip and fluid fraction
-  /// epsUndisturbed; returns 1 + dt beta / m - c beta (self_velocity.hpp; dt = 0 for particles
-  /// that cannot move), c at tRun after the run's start in fluid of fraction epsFluid; pressure:
-  /// the particle's own pressure-gradient response (SelfResponse). A particle too large for the
-  /// model sets err.
-  double correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
-                                double slipSampled, double dt, double tRun, double& beta,
-                                std::array<double, 3>& pressure, std::string& err) const;
   void depositParticles();
   void sumDepositsAcrossBlocks();
   void updateFluidCoefficients();
@@ -199,7 +184,6 @@ class Simulation {
   const CellField& sampled(const CellField& f, CellField& smoothed);
   void advanceParticles(int n);
   void refreshCellVelocity();
-  void resizeParticleBuffers(std::size_t n);
 
   const Config& cfg_;
   Layouts layouts_;
@@ -210,13 +194,12 @@ class Simulation {
   std::unique_ptr<fv::FluidSolver> fluid_;
   std::unique_ptr<dem::DemSolver> dem_;
 
-  // Coupling parameters.
-  KernelKind kernel_ = KernelKind::Trilinear;
-  DragLaw drag_ = DragLaw::DiFelice;
-  SelfVelocity selfVelocity_ = SelfVelocity::None;
-  double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6, steadyTol_ = 0;
+  // The coupling physics at the particles (coupled modes): stencils, sampled fields, drag law
+  // and response, deposits, forces (coupling/src/particle_coupling.hpp).
+  std::unique_ptr<ParticleCoupling> coupling_;
   long long demSubsteps_ = 0;  // coupling.dem_substeps (0: as many as the fluid's step allows)
   bool coupled_ = false;
+  double steadyTol_ = 0;
 
   // Cell fields on the fluid's cell layout.
   CellField solid_, scratch_;
@@ -224,25 +207,12 @@ class Simulation {
   int smoothingPasses_ = 0;
   std::array<CellField, 3> uCell_, uCellOld_, gradP_;
   HaloPlan halo_;
-  Stencils stencils_;
 
-  // Per-particle buffers (the particles of the view; grow-only): 15 doubles and a compact
-  // stencil a particle. applyCouplingForces() writes the coupling force where the transfer says
-  // (co-located: the DEM's fExt itself) and handForcesToParticles() hands it over.
+  // The particles the fluid's rank couples this step. applyCouplingForces() writes the
+  // coupling force where the transfer says (co-located: the DEM's fExt itself) and
+  // handForcesToParticles() hands it over.
   std::unique_ptr<ParticleTransfer> transfer_;
   ParticleView view_;
-  std::vector<double> volume_, beta_, epsAt_;
-  std::array<std::vector<double>, 3> uAt_, vDep_, gradPAt_;
-  /// coupling.self_velocity: V k_d per particle, its own pressure-gradient force per unit drag
-  /// (SelfResponse::pressure), from evaluateDrag to applyCouplingForces of the same step.
-  std::array<std::vector<double>, 3> ownPressure_;
-  /// evaluateDragOn's chunk of particles: the law's inputs eps, d, slip and its output beta.
-  static constexpr std::size_t kDragChunk = 256;
-  /// evaluateDrag's range (a multiple of kDragChunk): its 7 sampled values a particle
-  /// (229 KB) stay in cache until the drag reads them; large enough that the timers of the
-  /// nested phase cost little (~60 ranges for 250,000 particles).
-  static constexpr std::size_t kSampleChunk = 4096;
-  std::array<std::array<double, kDragChunk>, 4> dragChunk_{};
 
   RunCounters run_;
   double endTime_ = 0;
