@@ -84,8 +84,8 @@ void ParticleCoupling::evaluateDrag(const DragFields* fields, double dt, double 
   if (self) dec_->comm().raiseIfAny(err);
 }
 
-void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, double dt,
-                                      double time, std::string& err) {
+void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, double dt, double time,
+                                      std::string& err) {
   const ParticleView& p = view_;
   const bool self = selfVelocity_ != SelfVelocity::None;
   const double vCell = dec_->grid().cellVolume();
@@ -140,9 +140,8 @@ void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, doub
   }
 }
 
-void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, double beta,
-                                     double dt, double time, bool still, bool self,
-                                     std::string& err) {
+void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, double beta, double dt,
+                                     double time, bool still, bool self, std::string& err) {
   const ParticleView& p = view_;
   const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
   // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
@@ -167,7 +166,8 @@ void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, dou
   // held) and the pressure-gradient force -V rho_f grad p^n.
   const double m = p.mass[i];
   for (int d = 0; d < 3; ++d) {
-    vDep_[d][i] = velocityWithoutDrag(p.v[d][i], p.nonDrag(d, i), volume_[i], gradPAt_[d][i], dt, m);
+    vDep_[d][i] =
+        velocityWithoutDrag(p.v[d][i], p.nonDrag(d, i), volume_[i], gradPAt_[d][i], dt, m);
     if (self) {
       // The pressure-gradient force of the undisturbed fluid: less the particle's own share
       // V k F_d, F_d = beta_eff (u_at - v~) with v~ = v + dt (a - V k F_d / m) (implicit).
@@ -179,9 +179,11 @@ void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, dou
   }
 }
 
-double ParticleCoupling::correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
-                                          double slipSampled, double dt, double tRun, double& beta,
-                                          std::array<double, 3>& pressure, std::string& err) const {
+double ParticleCoupling::correctForSelfVelocity(std::size_t i, double epsFluid,
+                                                double epsUndisturbed, double slipSampled,
+                                                double dt, double tRun, double& beta,
+                                                std::array<double, 3>& pressure,
+                                                std::string& err) const {
   // The drag law sees the undisturbed slip |u_at + c F - v| = slip / (1 - c beta'), beta' the
   // coefficient with the particle's implicit response; c depends on the coefficient the fluid
   // takes implicitly, beta_eff = beta / denom. A few fixed-point passes (c changes by a few

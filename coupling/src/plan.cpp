@@ -5,6 +5,8 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/coupling/simulation.hpp"
+#include "coloc/coupling/transfer.hpp"
+#include "coloc/dem/dem.hpp"
 #include "coloc/partition/box_halo.hpp"
 #include "coloc/partition/setup.hpp"
 
@@ -14,9 +16,11 @@ namespace {
 constexpr long long kDouble = sizeof(double);
 // Ghost layers: the fluid keeps 2 (fv's kGhost), the coupling's own halo plan 1.
 constexpr int kFluidGhost = 2, kCouplingGhost = 1;
-// Doubles per row (the DEM's ghost update row; coupling/src/transfer.cpp Proxy::kRow; forces back:
-// 3).
-constexpr long long kGhostUpdate = 9, kProxyRow = 12, kForceRow = 3;
+// Doubles per row: the DEM's ghost update (its field table's built-in fields in kOpGhostUpdate),
+// the proxy transfer's row and the force sent back (coupling/transfer.hpp).
+const long long kGhostUpdate =
+    static_cast<long long>(dem::rowWidth(dem::ParticleStore{}, dem::kOpGhostUpdate));
+constexpr long long kProxyRow = kProxyRowDoubles, kForceRow = kForceRowDoubles;
 
 std::size_t k(Traffic t) {
   return static_cast<std::size_t>(t);

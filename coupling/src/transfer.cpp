@@ -46,7 +46,7 @@ class Colocated final : public ParticleTransfer {
 
 class Proxy final : public ParticleTransfer {
  public:
-  static constexpr int kRow = 12;  // x3 v3 nonDrag3 radius mass id
+  static constexpr int kRow = kProxyRowDoubles;  // x3 v3 nonDrag3 radius mass id
   Proxy(const Decomposition& fluid, dem::DemSolver& dem) : dec_(fluid), dem_(dem) {}
 
   ParticleView gather(Timers& timers) override {

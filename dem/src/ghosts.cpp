@@ -128,7 +128,7 @@ void DemSolver::Impl::migrate() {
   detail::resizeAll(p, p.nOwned);
   // a migrating particle: its row of the field table (kOpMigrate), its history count, then
   // (partner id, shear 3) per history
-  const std::size_t W = detail::rowWidth(p, kOpMigrate);
+  const std::size_t W = rowWidth(p, kOpMigrate);
   for (int d = 0; d < 3; ++d) {
     ghosts.sbuf[0].clear();
     ghosts.sbuf[1].clear();
@@ -208,7 +208,7 @@ void DemSolver::Impl::buildGhosts() {
     return;
   }
   const Int3 coords = dec.coords(), dims = dec.dims();
-  const std::size_t W = detail::rowWidth(p, kOpGhostBuild);
+  const std::size_t W = rowWidth(p, kOpGhostBuild);
   for (int d = 0; d < 3; ++d) {
     const std::size_t nBefore = p.size();
     auto& sw = ghosts.swaps[d];
@@ -262,7 +262,7 @@ void DemSolver::Impl::updateGhosts() {
     updateGhostsTiled();
     return;
   }
-  const std::size_t W = detail::rowWidth(p, kOpGhostUpdate);
+  const std::size_t W = rowWidth(p, kOpGhostUpdate);
   for (int d = 0; d < 3; ++d) {
     if (ghosts.nSeg[static_cast<std::size_t>(d)] == 0) continue;
     const double t0 = comm.wtime();

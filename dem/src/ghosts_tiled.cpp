@@ -72,7 +72,7 @@ void DemSolver::Impl::migrateTiled() {
   p.nGhost = 0;
   detail::resizeAll(p, p.nOwned);
   auto& g = ghosts;
-  const std::size_t W = detail::rowWidth(p, kOpMigrate);
+  const std::size_t W = rowWidth(p, kOpMigrate);
   const std::size_t n = p.nOwned;
   const int me = dec.rank();
   const auto size = static_cast<std::size_t>(comm.size());
@@ -175,7 +175,7 @@ void DemSolver::Impl::buildGhostsTiled() {
       ++g.runs[t];
     }
   }
-  const std::size_t W = detail::rowWidth(p, kOpGhostBuild);
+  const std::size_t W = rowWidth(p, kOpGhostBuild);
   const double t0 = comm.wtime();
   g.box.rebuild(comm, g.rank, g.index, g.near);
   const PlanTraffic t = forwardTargetRows(kOpGhostBuild, W);
@@ -190,7 +190,7 @@ void DemSolver::Impl::buildGhostsTiled() {
 }
 
 void DemSolver::Impl::updateGhostsTiled() {
-  const std::size_t W = detail::rowWidth(p, kOpGhostUpdate);
+  const std::size_t W = rowWidth(p, kOpGhostUpdate);
   const double t0 = comm.wtime();
   const PlanTraffic t = forwardTargetRows(kOpGhostUpdate, W);
   book(timers, t, 0, comm.wtime() - t0, Traffic::DemGhost);

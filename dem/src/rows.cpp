@@ -87,14 +87,6 @@ struct Plan {
 
 }  // namespace
 
-std::size_t rowWidth(const ParticleStore& p, unsigned op) {
-  std::size_t w = 0;
-  forEachField(p, [&](const FieldInfo& fi, const auto*) {
-    if (fi.ops & op) w += static_cast<std::size_t>(fi.components);
-  });
-  return w;
-}
-
 void packRow(const ParticleStore& p, unsigned op, std::size_t i, const double* shift, double* out) {
   Plan<true>(p, op).pack(i, shift, out);
 }
@@ -177,6 +169,14 @@ std::vector<double>& ParticleStore::field(std::string_view name, int component) 
 }
 const std::vector<double>& ParticleStore::field(std::string_view name, int component) const {
   return extraColumn(*this, name, component);
+}
+
+std::size_t rowWidth(const ParticleStore& p, unsigned op) {
+  std::size_t w = 0;
+  forEachField(p, [&](const FieldInfo& fi, const auto*) {
+    if (fi.ops & op) w += static_cast<std::size_t>(fi.components);
+  });
+  return w;
 }
 
 ParticleStore ownedRows(const ParticleStore& p) {

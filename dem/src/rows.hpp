@@ -9,8 +9,6 @@
 
 namespace coloc::dem::detail {
 
-/// Doubles per row of operation `op` (a FieldOp bit).
-std::size_t rowWidth(const ParticleStore& p, unsigned op);
 /// Particle i's fields of `op` -> out[0, rowWidth). `shift` (3 values, or nullptr) is added to
 /// the position components (the ghost operations pass the periodic shift of their swap).
 void packRow(const ParticleStore& p, unsigned op, std::size_t i, const double* shift, double* out);

@@ -177,8 +177,8 @@ void DemSolver::Impl::restore(DemState& st) {
     if ((e.ops & kOpState) && !std::any_of(p.extra.begin(), p.extra.end(),
                                            [&](const auto& f) { return f.name == e.name; }))
       p.addField(e.name, e.components, e.ops);
-  const std::size_t W = detail::rowWidth(q, kOpState);
-  if (W != detail::rowWidth(p, kOpState) ||
+  const std::size_t W = rowWidth(q, kOpState);
+  if (W != rowWidth(p, kOpState) ||
       comm.max(static_cast<long long>(W)) != comm.min(static_cast<long long>(W)))
     err =
         "the restored state's extra particle fields differ between the ranks or from the solver's";

@@ -24,6 +24,10 @@
 namespace coloc::coupling {
 
 /// What the coupling kernels see of the particles (n of them).
+/// Doubles a particle's row carries through the proxy transfer (independent strategy): to the
+/// fluid's rank x, v, the non-drag force (3 each), radius, mass, id; back, the force (3).
+inline constexpr int kProxyRowDoubles = 12, kForceRowDoubles = 3;
+
 struct ParticleView {
   std::size_t n = 0;
   /// The non-drag force on particle i is force[d][i] - held[d][i]: the DEM's last total force

@@ -69,6 +69,11 @@ void forEachField(Store& p, F&& f) {
   for (auto& e : p.extra) f(FieldInfo{e.name, e.components, e.ops, true}, e.data.data());
 }
 
+/// Doubles a row of operation `op` (a FieldOp bit) carries a particle: the sum of the components
+/// of the fields of `p` in `op` (a default ParticleStore: the built-in fields). What the DEM's
+/// exchanges send, and what coloc plan counts.
+std::size_t rowWidth(const ParticleStore& p, unsigned op);
+
 /// The owned rows of every field in kOpState (nGhost = 0): what a DemState holds.
 ParticleStore ownedRows(const ParticleStore& p);
 
