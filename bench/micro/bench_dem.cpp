@@ -2,7 +2,7 @@
 //
 //  BM_Contact<Hertz|Linear>/N : the contact-force kernel alone on N synthetic contacts
 //                               (items = contacts; ns per contact).
-//  BM_NeighborBuild/N         : a full rebuild (migration, sort by bin, ghosts, bins, Verlet
+//  BM_NeighbourBuild/N         : a full rebuild (migration, sort by bin, ghosts, bins, Verlet
 //                               lists) of a random dense packing of N spheres; items = particles.
 //  BM_ForceLoop/N             : one force evaluation over the same packing; items = particles.
 //  BM_DemBed                  : bench/cases/dem-bed.json (100,000 spheres; override the file with
@@ -115,7 +115,7 @@ struct Packing {
   }
 };
 
-void BM_NeighborBuild(benchmark::State& state) {
+void BM_NeighbourBuild(benchmark::State& state) {
   Packing p(packingCase(state.range(0)));
   const auto& comm = p.dec.comm();
   for (auto _ : state) {
@@ -293,7 +293,7 @@ void BM_DemBed(benchmark::State& state) {
       static_cast<double>(comm.sum(residentBytes()) - comm.sum(rssStart)) / static_cast<double>(n);
   state.counters["rebuilds"] = static_cast<double>(dem.rebuildCount());
   const auto share = [&](coloc::Phase ph) { return comm.max(timers.seconds(ph)) / wall; };
-  state.counters["f_neighbor"] = share(coloc::Phase::DemNeighbor);
+  state.counters["f_neighbour"] = share(coloc::Phase::DemNeighbour);
   state.counters["f_force"] = share(coloc::Phase::DemForce);
   state.counters["f_integrate"] = share(coloc::Phase::DemIntegrate);
   state.counters["f_ghost"] = share(coloc::Phase::DemGhost);
@@ -304,7 +304,7 @@ void BM_DemBed(benchmark::State& state) {
 
 BENCHMARK(contactKernel<Model::HertzMindlin>)->Name("BM_ContactHertz")->Arg(4096)->Arg(65536);
 BENCHMARK(contactKernel<Model::Linear>)->Name("BM_ContactLinear")->Arg(4096)->Arg(65536);
-BENCHMARK(BM_NeighborBuild)
+BENCHMARK(BM_NeighbourBuild)
     ->Arg(10000)
     ->Arg(100000)
     ->Iterations(10)

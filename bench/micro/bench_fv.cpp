@@ -91,7 +91,7 @@ void solvePressure(benchmark::State& state, Int3 n, fv::PressureSolver::Options 
   // grows with them (bench/scripts/model.py)
   double face = 0;
   for (int a = 0; a < 3; ++a) {
-    const int sides = (dec.neighbor(a, -1) >= 0) + (dec.neighbor(a, +1) >= 0);
+    const int sides = (dec.neighbour(a, -1) >= 0) + (dec.neighbour(a, +1) >= 0);
     face += sides * static_cast<double>(c[(a + 1) % 3]) * c[(a + 2) % 3];
   }
   state.counters["face_cells"] = dec.comm().max(face);

@@ -44,7 +44,7 @@ void halo(const GlobalGrid& grid, const Blocks& b, int r, const Layout& l, int f
           long long times, TrafficCount& out) {
   for (int d = 0; d < 3; ++d)
     for (int side = 0; side < 2; ++side) {
-      const int peer = b.neighbor(grid, r, d, side == 0 ? -1 : 1);
+      const int peer = b.neighbour(grid, r, d, side == 0 ? -1 : 1);
       if (peer < 0 || peer == r) continue;
       const long long layers = (side == 0) != reverse ? l.g + l.s[d] : l.g;
       out.bytes += times * layers * l.across(d) * fields * kDouble;
@@ -318,7 +318,7 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
     const Layout cell{n, kFluidGhost, {0, 0, 0}};
     for (int d = 0; d < 3; ++d)
       for (int side = 0; side < 2; ++side) {
-        const int peer = F.neighbor(g, r, d, side == 0 ? -1 : 1);
+        const int peer = F.neighbour(g, r, d, side == 0 ? -1 : 1);
         if (peer >= 0 && peer != r) R.ghostCells += 1LL * kFluidGhost * cell.across(d);
       }
     // fv::FluidSolver::step: eps, eps_old, K, K u_p (6 fields); u* on the faces (each component
@@ -417,7 +417,7 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
     for (int r = 0; r < ranks; ++r)
       before[static_cast<std::size_t>(r)] = P[static_cast<std::size_t>(r)][0].size();
     for (int r = 0; r < ranks; ++r) {
-      const int nLo = D.neighbor(g, r, d, -1), nHi = D.neighbor(g, r, d, +1);
+      const int nLo = D.neighbour(g, r, d, -1), nHi = D.neighbour(g, r, d, +1);
       if (nLo < 0 && nHi < 0) continue;
       const Int3 c = D.coordsOf(r);
       const double lo = bins.lo(g, d, bins.blockBinLo(d, D.lo(r)[d]));

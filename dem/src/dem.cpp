@@ -3,12 +3,12 @@
 // One sub-step (velocity Verlet, as LAMMPS/LIGGGHTS run it):
 //   1. v += dt/2 F/m, x += dt v, omega += dt/2 T/I                     (DemIntegrate)
 //   2. one allreduce: largest displacement since the last rebuild and largest overlap
-//      -> rebuild when any particle moved more than skin/2            (DemNeighbor)
+//      -> rebuild when any particle moved more than skin/2            (DemNeighbour)
 //   3. rebuild: contact history packed per particle, migration in three sweeps x, y, z
-//      (DemMigrate); owned particles re-sorted by (bin, id) (DemNeighbor); ghosts within the
+//      (DemMigrate); owned particles re-sorted by (bin, id) (DemNeighbour); ghosts within the
 //      interaction range of every block face in three sweeps x, y, z, so edges and corners are
 //      covered, periodic faces shift positions by the box length (DemGhost); bins and Verlet
-//      lists (DemNeighbor).  Otherwise: ghost positions/velocities refreshed along the same
+//      lists (DemNeighbour).  Otherwise: ghost positions/velocities refreshed along the same
 //      send lists (DemGhost).
 //   4. forces: gravity + fExt + contacts + walls                        (DemForce)
 //   5. v += dt/2 F/m, omega += dt/2 T/I                                 (DemIntegrate)
@@ -52,7 +52,7 @@ void DemSolver::Impl::substep() {
     return;
   }
   if (!inflow.empty()) {
-    ScopedPhase t(timers, Phase::DemNeighbor);
+    ScopedPhase t(timers, Phase::DemNeighbour);
     insertInflow();
   }
   {
@@ -62,7 +62,7 @@ void DemSolver::Impl::substep() {
   bool again;
   timers.syncPoint(comm);
   {
-    ScopedPhase t(timers, Phase::DemNeighbor);
+    ScopedPhase t(timers, Phase::DemNeighbour);
     again = decideRebuild();
   }
   if (again) {
@@ -207,7 +207,7 @@ void DemSolver::Impl::rebuild(bool first) {
     migrate();
   }
   {
-    ScopedPhase t(timers, Phase::DemNeighbor);
+    ScopedPhase t(timers, Phase::DemNeighbour);
     sortByBin();
   }
   {
@@ -215,7 +215,7 @@ void DemSolver::Impl::rebuild(bool first) {
     buildGhosts();
   }
   {
-    ScopedPhase t(timers, Phase::DemNeighbor);
+    ScopedPhase t(timers, Phase::DemNeighbour);
     buildLists();
     keepPositions();
   }

@@ -19,7 +19,7 @@ using namespace detail;
 int DemSolver::Impl::neighbours(int d, int* out) const {
   int n = 0;
   for (int s = -1; s <= 1; s += 2) {
-    const int r = dec.neighbor(d, s);
+    const int r = dec.neighbour(d, s);
     if (r != MPI_PROC_NULL && (n == 0 || out[0] != r)) out[n++] = r;
   }
   return n;
@@ -27,7 +27,7 @@ int DemSolver::Impl::neighbours(int d, int* out) const {
 
 int DemSolver::Impl::importSegments(const CommPlan& plan, int d,
                                     std::array<GhostPlan::Segment, 2>& seg, int at) const {
-  const int nLo = dec.neighbor(d, -1), nHi = dec.neighbor(d, +1);
+  const int nLo = dec.neighbour(d, -1), nHi = dec.neighbour(d, +1);
   int n = 0;
   for (const int r : {nHi, nLo}) {
     if (r == MPI_PROC_NULL || (n == 1 && r == nHi)) continue;  // both faces to one rank: once
@@ -139,7 +139,7 @@ void DemSolver::Impl::migrate() {
       int dir = crossAxis(i, d, err);
       if (dir == kLost) dir = 0;
       const int h0 = hist.hStart[i], h1 = hist.hStart[i + 1];
-      if (dir != 0 && dec.neighbor(d, dir) == MPI_PROC_NULL) dir = 0;  // cannot happen
+      if (dir != 0 && dec.neighbour(d, dir) == MPI_PROC_NULL) dir = 0;  // cannot happen
       if (dir == 0) {
         keepRow(i, w, h0, h1, hw);
         ++w;
@@ -158,7 +158,7 @@ void DemSolver::Impl::migrate() {
     // the two faces' rows through one plan whose items are the doubles of the rows (their
     // lengths vary with the histories); the counts go to the neighbours only
     const double t0 = comm.wtime();
-    const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+    const int to[2] = {dec.neighbour(d, -1), dec.neighbour(d, +1)};
     auto& sb = ghosts.sbuf;
     ghosts.counts.assign(static_cast<std::size_t>(comm.size()), 0);
     for (int s = 0; s < 2; ++s)
@@ -187,7 +187,7 @@ PlanTraffic DemSolver::Impl::forwardGhostRows(int d, unsigned op, std::size_t W)
   // Both faces' rows of axis d (operation op, periodic shift applied) packed in place into the
   // axis's plan buffer, then sent; what arrives lands in ghosts.rbuf.
   const auto& sw = ghosts.swaps[d];
-  const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+  const int to[2] = {dec.neighbour(d, -1), dec.neighbour(d, +1)};
   auto& plan = ghosts.plan[static_cast<std::size_t>(d)];
   const std::span<double> out = plan.packBuffer(static_cast<int>(W));
   for (int s = 0; s < 2; ++s) {
@@ -212,7 +212,7 @@ void DemSolver::Impl::buildGhosts() {
   for (int d = 0; d < 3; ++d) {
     const std::size_t nBefore = p.size();
     auto& sw = ghosts.swaps[d];
-    const int to[2] = {dec.neighbor(d, -1), dec.neighbor(d, +1)};
+    const int to[2] = {dec.neighbour(d, -1), dec.neighbour(d, +1)};
     ghosts.rank.clear();
     ghosts.index.clear();
     for (int s = 0; s < 2; ++s) {

@@ -1,7 +1,7 @@
 // dem/src/history.hpp — the contact-history pool of the DEM.
 //
 // hS holds 3 doubles per slot. Between rebuilds the slots are used by the neighbour-list entries
-// of touching pairs (NeighborList::slot), with a free list; from the packing at a rebuild to the
+// of touching pairs (NeighbourList::slot), with a free list; from the packing at a rebuild to the
 // next list build they are rows per owned particle (hStart, key hKey = the partner's global id,
 // walls -1..-6), which migration carries; the list build then takes its entries' slots from the
 // rows (no second pool).

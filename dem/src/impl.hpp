@@ -1,5 +1,5 @@
-// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its rooms. Each room is a small
-// struct holding its data (bins.hpp, neighbors.hpp, history.hpp, ghosts.hpp; the particle
+// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its parts. Each part is a small
+// struct holding its data (bins.hpp, neighbours.hpp, history.hpp, ghosts.hpp; the particle
 // arrays and their field table in coloc/dem/dem.hpp); the methods are defined in the file of
 // their concept:
 //   dem.cpp        the sub-step (velocity Verlet), the rebuild sequence, the public interface
@@ -9,7 +9,7 @@
 //   ghosts.cpp     face exchanges: migration, ghost build and update (rows of the field table)
 //   ghosts_tiled.cpp  the same on a tiled layout (general boxes), one exchange each
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
-//   neighbors.cpp  the half Verlet list build (and the history lookup of its entries)
+//   neighbours.cpp  the half Verlet list build (and the history lookup of its entries)
 //   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
 //   state.cpp      save/restore (checkpoints, re-balancing)
 #pragma once
@@ -27,7 +27,7 @@
 #include "generate.hpp"
 #include "ghosts.hpp"
 #include "history.hpp"
-#include "neighbors.hpp"
+#include "neighbours.hpp"
 #include "pairs.hpp"
 #include "rows.hpp"
 
@@ -96,9 +96,9 @@ struct DemSolver::Impl {
   std::vector<detail::NewParticle> incoming;  // accepted at the step's start, added at its rebuild
   bool forceRebuild = false;
 
-  // the rooms
+  // the parts
   detail::Bins bins;
-  detail::NeighborList list;
+  detail::NeighbourList list;
   detail::HistoryPool hist;
   detail::GhostPlan ghosts;
   std::vector<int> inScr;  // scratch (grow-only)
@@ -204,7 +204,7 @@ struct DemSolver::Impl {
   void buildGhostsTiled();
   void updateGhostsTiled();
   PlanTraffic forwardTargetRows(unsigned op, std::size_t W);
-  // bins.cpp, neighbors.cpp
+  // bins.cpp, neighbours.cpp
   void sortByBin();
   void buildLists();
   // forces.cpp

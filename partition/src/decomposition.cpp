@@ -256,8 +256,8 @@ const std::array<std::vector<int>, 3>& Decomposition::cuts() const {
   return cuts_;
 }
 
-int Decomposition::neighbor(int d, int side) const {
-  requireGrid("neighbor");
+int Decomposition::neighbour(int d, int side) const {
+  requireGrid("neighbour");
   return nbr_[d][side > 0 ? 1 : 0];
 }
 

@@ -56,14 +56,14 @@ HaloPlan::HaloPlan(const Decomposition& dec, const FieldLayout& layout, const Fi
   for (int d = 0; d < 3; ++d) {
     const int n = layout.n[d], s = layout.stagger[d];
     static const char* axis[3] = {"x", "y", "z"};
-    if (g > n && (dec.neighbor(d, -1) != MPI_PROC_NULL || dec.neighbor(d, +1) != MPI_PROC_NULL))
+    if (g > n && (dec.neighbour(d, -1) != MPI_PROC_NULL || dec.neighbour(d, +1) != MPI_PROC_NULL))
       throw ConfigError("partition.dims",
                         std::string("a block is ") + std::to_string(n) + " cells thick along " +
                             axis[d] + ", thinner than the " + std::to_string(g) +
                             " ghost layers the solvers need: use fewer ranks along that axis");
     Side low, high;
-    low.peer = dec.neighbor(d, -1);
-    high.peer = dec.neighbor(d, +1);
+    low.peer = dec.neighbour(d, -1);
+    high.peer = dec.neighbour(d, +1);
     low.ownedEdge = all;
     low.ownedEdge.lo[d] = 0;
     low.ownedEdge.hi[d] = g + s;

@@ -20,7 +20,7 @@ Int3 Blocks::hi(int rank) const {
           cuts[2][static_cast<std::size_t>(c[2]) + 1]};
 }
 
-int Blocks::neighbor(const GlobalGrid& g, int rank, int d, int side) const {
+int Blocks::neighbour(const GlobalGrid& g, int rank, int d, int side) const {
   Int3 c = coordsOf(rank);
   c[d] += side > 0 ? 1 : -1;
   if (c[d] < 0 || c[d] >= dims[d]) {

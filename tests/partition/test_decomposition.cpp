@@ -65,7 +65,7 @@ TEST_P(DecompositionTest, NeighboursAreMutualAndWrapOnPeriodicAxes) {
   const auto dec = Decomposition::uniform(Comm::world(), g);
   for (int d = 0; d < 3; ++d) {
     for (int side : {-1, +1}) {
-      const int n = dec.neighbor(d, side);
+      const int n = dec.neighbour(d, side);
       Int3 c = dec.coords();
       c[d] += side;
       if (c[d] < 0 || c[d] >= dec.dims()[d]) {

@@ -73,7 +73,7 @@ TEST_P(TiledDecomposition, OwnersBoxesAndWalls) {
   // The Cartesian queries have no meaning on boxes: they refuse instead of answering wrongly.
   EXPECT_THROW((void)dec.dims(), Error);
   EXPECT_THROW((void)dec.cuts(), Error);
-  EXPECT_THROW((void)dec.neighbor(0, 1), Error);
+  EXPECT_THROW((void)dec.neighbour(0, 1), Error);
   EXPECT_THROW((void)dec.coords(), Error);
 }
 

@@ -35,7 +35,7 @@ enum class Phase : std::uint8_t {
   FluidProject,           // velocity correction
   FluidCellFields,        // cell-centred velocity and pressure gradient the coupling samples
   // dem: one sub-step
-  DemNeighbor,   // binning, sorting, Verlet lists
+  DemNeighbour,  // binning, sorting, Verlet lists
   DemForce,      // contact and wall forces
   DemIntegrate,  // velocity Verlet
   DemGhost,      // ghost update (intra-physics)

@@ -10,7 +10,7 @@
 // A tiled decomposition (fromBoxes, partition/tiled.hpp) has no process grid: rank r owns any box
 // of whole cells, the boxes tile the grid, and the owner of a cell is found by walking the tree
 // of cut planes that separates the boxes (O(log P), no per-cell map). On a tiled decomposition
-// dims(), coords(), cuts(), neighbor(), rankOfCoords() and coordsOfRank() throw Error: the
+// dims(), coords(), cuts(), neighbour(), rankOfCoords() and coordsOfRank() throw Error: the
 // exchanges use the box neighbours (partition/box_halo.hpp) instead.
 //
 // Face ownership (staggered fields): along axis d, the face with global index f (the low face of
@@ -88,7 +88,7 @@ class Decomposition {
 
   /// Neighbour rank across the low (side = -1) or high (side = +1) face along `d`, with
   /// periodic wrap; MPI_PROC_NULL at a non-periodic box face.
-  int neighbor(int d, int side) const;
+  int neighbour(int d, int side) const;
   /// True when this block touches a non-periodic face of the box (a physical boundary).
   bool atLowBoundary(int d) const { return !grid_.periodic[d] && lo_[d] == 0; }
   bool atHighBoundary(int d) const { return !grid_.periodic[d] && hi_[d] == grid_.cells[d]; }

@@ -40,7 +40,7 @@ struct Blocks {
   Int3 hi(int rank) const;
   /// Neighbour across the low (side -1) or high (+1) face along d, periodic wrap; -1 at a
   /// non-periodic box face (MPI_Cart_shift's MPI_PROC_NULL).
-  int neighbor(const GlobalGrid& g, int rank, int d, int side) const;
+  int neighbour(const GlobalGrid& g, int rank, int d, int side) const;
   /// Block index along d of a global cell (0 <= cell < N_d).
   int blockAlong(int d, int cell) const;
 };

@@ -1,5 +1,5 @@
-// dem/src/neighbors.hpp — the half Verlet list of the DEM (rows in canonical (bin, id) order,
-// see neighbors.cpp) and the positions at its build (the rebuild criterion).
+// dem/src/neighbours.hpp — the half Verlet list of the DEM (rows in canonical (bin, id) order,
+// see neighbours.cpp) and the positions at its build (the rebuild criterion).
 #pragma once
 
 #include <array>
@@ -9,7 +9,7 @@
 
 namespace coloc::dem::detail {
 
-struct NeighborList {
+struct NeighbourList {
   std::vector<int> rowStart, nbr;  // row q (holder binItems[q]): partners nbr[rowStart[q]...]
   std::vector<int> slot;           // per entry: its history in the pool (-1: none)
   std::size_t bytes() const { return cap(rowStart) + cap(nbr) + cap(slot); }

@@ -1,4 +1,4 @@
-// dem/src/neighbors.cpp — the half Verlet list in canonical (bin, id) order, and the
+// dem/src/neighbours.cpp — the half Verlet list in canonical (bin, id) order, and the
 // contact-history lookup of its entries.
 #include <algorithm>
 #include <cmath>
