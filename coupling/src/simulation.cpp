@@ -84,9 +84,12 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
 
   coupling_ = std::make_unique<ParticleCoupling>(cfg, dec_, timers_, mode_ == RunMode::DummyDem);
   smoothingPasses_ = static_cast<int>(cfg.integer("coupling.smoothing_passes"));
-  const FieldLayout layout = std::as_const(*fluid_).fields().p.layout();
+  const FieldLayout layout = fluid_->fields().p.layout();
   solid_ = CellField(layout);
   scratch_ = CellField(layout);
+  eps_ = CellField(layout);
+  K_ = CellField(layout);
+  for (auto& k : KUp_) k = CellField(layout);
   for (int d = 0; d < 3; ++d) {
     uCell_[d] = CellField(layout);
     uCellOld_[d] = CellField(layout);
@@ -115,10 +118,9 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   depositParticles();
   sumDepositsAcrossBlocks();
   updateFluidCoefficients();
-  auto f = fluid_->couplingInputs();
-  f.K.fill(0.0);
-  for (auto& k : f.KUp) k.fill(0.0);
-  fluid_->startCoupling();
+  K_.fill(0.0);
+  for (auto& k : KUp_) k.fill(0.0);
+  fluid_->startCoupling(fluidInputs());
   refreshCellVelocity();
   fluid_->pressureGradient(gradP_);
   for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
@@ -240,7 +242,7 @@ const CellField& Simulation::sampled(const CellField& f, CellField& smoothed) {
 Simulation::DragFields Simulation::fluidForDrag() {
   ScopedPhase t(timers_, Phase::CouplingInterpolate);
   // eps = 1 - S(solid) is smooth already; the fluid's eps^{n+1}, ghosts filled by its step.
-  DragFields f{&std::as_const(*fluid_).fields().eps};
+  DragFields f{&fluid_->fields().eps};
   for (int d = 0; d < 3; ++d) {
     f[1 + d] = &sampled(uCell_[d], uSmooth_[d]);
     f[4 + d] = &sampled(gradP_[d], gradPSmooth_[d]);
@@ -255,11 +257,10 @@ void Simulation::evaluateDrag(double dt, const DragFields* fields) {
 
 void Simulation::depositParticles() {
   ScopedPhase t(timers_, Phase::CouplingDeposit);
-  auto f = fluid_->couplingInputs();
   solid_.fill(0.0);
-  f.K.fill(0.0);
-  for (int d = 0; d < 3; ++d) f.KUp[d].fill(0.0);
-  coupling_->deposit(solid_, f.K, {&f.KUp[0], &f.KUp[1], &f.KUp[2]});
+  K_.fill(0.0);
+  for (auto& k : KUp_) k.fill(0.0);
+  coupling_->deposit(solid_, K_, {&KUp_[0], &KUp_[1], &KUp_[2]});
 }
 
 void Simulation::sumDepositsAcrossBlocks() {
@@ -267,8 +268,7 @@ void Simulation::sumDepositsAcrossBlocks() {
   // periodic wrap is arithmetic inside the block, like the fold at walls: booked to deposition
   // (so a 1-rank run shows no across-ranks share without bytes).
   ScopedPhase t(timers_, halo_.crossesRanks() ? Phase::ExchangeRemote : Phase::CouplingDeposit);
-  auto f = fluid_->couplingInputs();
-  Field3<double>* fields[5] = {&solid_, &f.K, &f.KUp[0], &f.KUp[1], &f.KUp[2]};
+  Field3<double>* fields[5] = {&solid_, &K_, &KUp_[0], &KUp_[1], &KUp_[2]};
   halo_.scatterSum(fields, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
   if (smoothingPasses_ > 0) {
     ScopedPhase s(timers_, Phase::CouplingDeposit);
@@ -283,19 +283,25 @@ void Simulation::smoothField(CellField& f) {
 void Simulation::updateFluidCoefficients() {
   // eps^{n+1} into the fluid's one eps array (owned cells); its step fills the ghosts.
   ScopedPhase t(timers_, Phase::CouplingDeposit);
-  auto f = fluid_->couplingInputs();
   const double epsMin = coupling_->minFluidFraction();
   double solid = 0;
   forEach(solid_.interior(), [&](int i, int j, int k) {
     solid += solid_(i, j, k);
-    f.eps(i, j, k) = std::clamp(1.0 - solid_(i, j, k), epsMin, 1.0);
+    eps_(i, j, k) = std::clamp(1.0 - solid_(i, j, k), epsMin, 1.0);
   });
   run_.solidVolume = dec_.comm().sum(solid) * dec_.grid().cellVolume();
 }
 
+fv::CouplingInputs Simulation::fluidInputs() const {
+  return {eps_, K_, KUp_};
+}
+
 void Simulation::advanceFluid(double dt) {
   fault::point("fluid", run_.steps + 1);
-  fluid_->step(dt);
+  if (coupled_)
+    fluid_->step(dt, fluidInputs());
+  else
+    fluid_->step(dt);
   run_.lastStepDt = dt;
 }
 
@@ -338,11 +344,10 @@ void Simulation::applyCouplingForces(double dt) {
   double sums[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   coupling_->applyForces(transfer_->forceTarget(), dt, sums);
   // What the fluid lost through its drag term over the step: rho V (K u - K u_p) dt per cell.
-  const auto& f = fluid_->fields();
   const double rv = coupling_->fluidDensity() * dec_.grid().cellVolume() * dt;
   forEach(solid_.interior(), [&](int i, int j, int k) {
     for (int d = 0; d < 3; ++d)
-      sums[3 + d] -= rv * (f.K(i, j, k) * uCell_[d](i, j, k) - f.KUp[d](i, j, k));
+      sums[3 + d] -= rv * (K_(i, j, k) * uCell_[d](i, j, k) - KUp_[d](i, j, k));
   });
   dec_.comm().sumInPlace(std::span<double>(sums, 9));
   double gross = 0, diff = 0;

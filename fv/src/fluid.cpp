@@ -78,29 +78,34 @@ FluidSolver::FluidSolver(const Decomposition& dec, const Config& cfg, Timers& ti
     : impl_(std::make_unique<Impl>(dec, cfg, timers)) {}
 FluidSolver::~FluidSolver() = default;
 
-FluidFields& FluidSolver::fields() {
-  impl_->uGhostsFresh = false;
-  impl_->epsGhostsFresh = false;
-  impl_->ratesStale = true;
-  return impl_->f;
-}
 const FluidFields& FluidSolver::fields() const {
   return impl_->f;
 }
-void FluidSolver::markCoefficientsChanged() {
-  impl_->coefficientsChanged = true;
-}
-CouplingInputs FluidSolver::couplingInputs() {
+FluidFields& FluidSolver::edit() {
   auto& m = *impl_;
-  m.uGhostsFresh = false;  // a superficial inlet's face velocity is U / eps
+  m.uGhostsFresh = false;
   m.epsGhostsFresh = false;
-  m.ratesStale = true;  // as after fields()
+  m.ratesStale = true;
   m.coefficientsChanged = true;
-  return {m.f.eps, m.f.K, m.f.KUp};
+  return m.f;
 }
-void FluidSolver::startCoupling() {
+void FluidSolver::Impl::takeInputs(const CouplingInputs& in) {
+  // The owned cells; the ghosts are filled by the step (exchangeInputs) or startCoupling().
+  const IndexBox owned{{0, 0, 0}, dec.cells()};
+  forEach(owned, [&](int i, int j, int k) {
+    f.eps(i, j, k) = in.eps(i, j, k);
+    f.K(i, j, k) = in.K(i, j, k);
+    for (int d = 0; d < 3; ++d) f.KUp[d](i, j, k) = in.KUp[d](i, j, k);
+  });
+  uGhostsFresh = false;  // a superficial inlet's face velocity is U / eps
+  epsGhostsFresh = false;
+  ratesStale = true;
+  coefficientsChanged = true;
+}
+void FluidSolver::startCoupling(const CouplingInputs& in) {
   auto& m = *impl_;
   auto& f = m.f;
+  m.takeInputs(in);
   {
     ScopedPhase t(m.timers, Phase::FluidHalo);
     m.cellHalo.gather(f.eps, &m.timers, Exchange::IntraPhysics);
@@ -111,6 +116,10 @@ void FluidSolver::startCoupling() {
   }
   m.epsGhostsFresh = true;
   std::copy(f.eps.data().begin(), f.eps.data().end(), f.epsOld.data().begin());
+}
+void FluidSolver::step(double dt, const CouplingInputs& in) {
+  impl_->takeInputs(in);
+  impl_->step(dt);
 }
 void FluidSolver::step(double dt) {
   impl_->step(dt);
@@ -133,7 +142,7 @@ double FluidSolver::nextDt() const {
   auto& m = *impl_;
   if (!m.prm.adaptive) return m.prm.dtFixed;
   if (m.ratesStale) {
-    // The velocity was written through fields() since the last step: recompute the rate
+    // The velocity was written through edit() since the last step: recompute the rate
     // (collective, like step()).
     m.computeRates(0.0);
     m.ratesStale = false;

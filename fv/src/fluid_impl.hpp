@@ -57,7 +57,7 @@ struct FluidSolver::Impl {
   bool uGhostsFresh = false, coefficientsChanged = true, haveOld = false, ratesStale = false;
   // A superficial inlet reads eps in the ghost cells next to the face (U / eps of the adjacent
   // cell, tangential ghosts included): those ghosts must be current when the velocity ghosts are
-  // filled, also when fields() was written outside a step (e.g. the coupling's set-up).
+  // filled, also when edit() was written outside a step (e.g. the coupling's set-up).
   bool superficialInlet = false, epsGhostsFresh = false;
   double time = 0, dtOld = 0, matrixDt = -1;
   bool anyK = false;
@@ -84,6 +84,8 @@ struct FluidSolver::Impl {
 
   // ---- the step (step.cpp) ----------------------------------------------------------------
   void step(double dt);
+  /// The coupling's inputs (owned cells) into f.eps, K, KUp; marks what depends on them.
+  void takeInputs(const CouplingInputs& in);
   /// Halos and zero-gradient ghosts of the cell inputs eps^{n+1}, eps^n, K, K u_p.
   void exchangeInputs();
   /// Halo and boundary ghosts of u (and, for a superficial inlet, of eps first).

@@ -49,7 +49,7 @@ double epsAt(const Real3& x, double t) {
 
 /// Set eps^{n+1}(t), K and K u_p on owned cells.
 void setInputs(fv::FluidSolver& s, const Decomposition& dec, double t) {
-  auto& f = s.fields();
+  auto& f = s.edit();
   forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
     const Real3 x = fvtest::cellPos(dec, i, j, k);
     f.eps(i, j, k) = epsAt(x, t);
@@ -58,7 +58,6 @@ void setInputs(fv::FluidSolver& s, const Decomposition& dec, double t) {
     f.KUp[1](i, j, k) = -0.1 * x[0] * f.K(i, j, k);
     f.KUp[2](i, j, k) = 0.05 * f.K(i, j, k);
   });
-  s.markCoefficientsChanged();
 }
 
 struct Solo {

@@ -131,13 +131,12 @@ TEST(FvPatches, ClosedBoxBalance) {
   // eps^n: a permutation of a fixed set of values that changes every step (the total stays the
   // same up to round-off, which the order of the sums brings in).
   auto setEps = [&](int n) {
-    auto& f = s.solver.fields();
+    auto& f = s.solver.edit();
     forEach(IndexBox{{0, 0, 0}, s.dec.cells()}, [&](int i, int j, int k) {
       const int L = s.dec.lo()[0] + i + 10 * (s.dec.lo()[1] + j + 8 * (s.dec.lo()[2] + k));
       const int m = (7 * L + 37 * n) % 480;
       f.eps(i, j, k) = 0.65 + 0.34 * std::sin(1.37 * m);  // 0.31 .. 0.99: inexact differences
     });
-    s.solver.markCoefficientsChanged();
   };
   setEps(0);
   s.solver.syncEpsOld();

@@ -38,11 +38,10 @@ TEST(FvPorous, DarcyBrinkmanPressureDrop) {
   const Decomposition dec = decompositionFromConfig(Comm::world(), cfg);
   Timers timers;
   fv::FluidSolver solver(dec, cfg, timers);
-  auto& f = solver.fields();
+  auto& f = solver.edit();
   f.eps.fill(eps);
   f.K.fill(K);
   solver.syncEpsOld();
-  solver.markCoefficientsChanged();
   const long long steps = fvtest::runSteady(solver, 1e-9, 50000);
   EXPECT_LT(steps, 50000);
 
@@ -84,7 +83,7 @@ TEST(FvPorous, DragImpulseEqualsFluidMomentumChange) {
   Timers timers;
   fv::FluidSolver solver(dec, cfg, timers);
   const Real3 up{0.3, -0.2, 0.1};
-  auto& f = solver.fields();
+  auto& f = solver.edit();
   forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
     const Real3 x = fvtest::cellPos(dec, i, j, k);
     f.eps(i, j, k) = 0.7;
@@ -92,7 +91,6 @@ TEST(FvPorous, DragImpulseEqualsFluidMomentumChange) {
     for (int c = 0; c < 3; ++c) f.KUp[c](i, j, k) = f.K(i, j, k) * up[c];
   });
   solver.syncEpsOld();
-  solver.markCoefficientsChanged();
   auto momentum = [&]() {
     Real3 m{0, 0, 0};
     const auto& ff = std::as_const(solver).fields();

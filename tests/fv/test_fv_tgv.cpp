@@ -47,7 +47,7 @@ TgvError tgv(int n, const std::string& solver = "pfmg", const std::string& press
            : c == 1 ? -std::cos(x[0]) * std::sin(x[1]) * d
                     : 0.0;
   };
-  auto& f = s.fields();
+  auto& f = s.edit();
   for (int c = 0; c < 3; ++c)
     forEach(fvtest::ownedFaces(dec, c), [&](int i, int j, int k) {
       f.u[c](i, j, k) = exact(c, fvtest::facePos(dec, c, i, j, k), 0.0);

@@ -52,7 +52,7 @@ std::string scratchFile(const std::string& name) {
 
 /// Coefficients that change every step, as the coupling's would.
 void setCoefficients(const Decomposition& dec, fv::FluidSolver& s, int k) {
-  auto& f = s.fields();
+  auto& f = s.edit();
   const auto& g = dec.grid();
   forEach(f.p.interior(), [&](int i, int j, int kk) {
     const double x = g.origin[0] + (dec.lo()[0] + i + 0.5) * g.spacing(0);
@@ -65,7 +65,6 @@ void setCoefficients(const Decomposition& dec, fv::FluidSolver& s, int k) {
     f.KUp[1](i, j, kk) = 0.0;
     f.KUp[2](i, j, kk) = -0.05 * f.K(i, j, kk);
   });
-  s.markCoefficientsChanged();
 }
 
 void advance(const Decomposition& dec, fv::FluidSolver& s, int from, int count) {

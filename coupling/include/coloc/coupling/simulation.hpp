@@ -177,6 +177,8 @@ class Simulation {
   void sumDepositsAcrossBlocks();
   void updateFluidCoefficients();
   void advanceFluid(double dt);
+  /// What the coupling hands the fluid for a step: eps^{n+1}, K, K u_p (owned cells).
+  fv::CouplingInputs fluidInputs() const;
   void sampleFluidForForces();
   void applyCouplingForces(double dt);
   void handForcesToParticles();
@@ -201,8 +203,10 @@ class Simulation {
   bool coupled_ = false;
   double steadyTol_ = 0;
 
-  // Cell fields on the fluid's cell layout.
-  CellField solid_, scratch_;
+  // Cell fields on the fluid's cell layout: the deposits (solid volume fraction, K, K u_p; K and
+  // K u_p summed across blocks in place) and eps^{n+1}, the fluid's inputs of the step.
+  CellField solid_, scratch_, eps_, K_;
+  std::array<CellField, 3> KUp_;
   std::array<CellField, 3> uSmooth_, gradPSmooth_;
   int smoothingPasses_ = 0;
   std::array<CellField, 3> uCell_, uCellOld_, gradP_;

@@ -6,13 +6,16 @@
 // hypre Struct PCG + PFMG (SMG selectable).
 //
 // Contract with coupling/ (do not change without changing the coupling):
-//  - the fluid owns its inputs (the one eps^{n+1} array, K, KUp; checkpointed with it) and the
-//    old level eps^n it needs. The coupling writes the owned cells through couplingInputs()
-//    before step() (that marks the pressure matrix for rebuild); once, after writing the
-//    initial eps, startCoupling() makes it the state at the start too. step() fills the inputs'
-//    ghosts (one halo exchange) and copies eps -> eps^n at its end; between steps the coupling
-//    reads eps with its ghosts from fields() (no copy of its own). Fluid-only cases leave eps = 1
-//    and K = 0 (or set them in tests).
+//  - the coupling hands the fluid its inputs explicitly: step(dt, CouplingInputs) takes the
+//    owned cells of eps^{n+1}, K and KUp (the pressure matrix is then rebuilt); once, before the
+//    first step, startCoupling(inputs) makes the initial eps the state at the start too. The
+//    fluid keeps its copy (checkpointed with it) and the old level eps^n it needs; step() fills
+//    the ghosts (one halo exchange) and copies eps -> eps^n at its end; between steps the
+//    coupling reads eps with its ghosts from fields(). Fluid-only cases leave eps = 1 and K = 0
+//    (or set them in tests through edit()).
+//  - fields() only reads. Writing the state outside a step (initial conditions, tests, restart)
+//    goes through edit(), which says so: the next step refreshes every ghost layer, the
+//    velocity rate and the pressure matrix.
 //  - drag at a face uses the arithmetic mean of the two adjacent cells' K and KUp, and
 //    cellVelocity() is the arithmetic mean of the two faces of a cell: the two averages are
 //    adjoint, so the drag the fluid loses equals the drag the particles gain to round-off.
@@ -21,6 +24,7 @@
 
 #include <array>
 #include <memory>
+#include <type_traits>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/timers.hpp"
@@ -50,12 +54,12 @@ struct FluidCounters {
   bool ratesStale = false;    // nextDt() recomputes the velocity rate first
 };
 
-/// The fluid's inputs from the coupling, for writing their owned cells (the fluid's own arrays:
-/// fields().eps, K, KUp).
+/// The fluid's inputs from the coupling for one step: fields on the fluid's cell layout, of which
+/// the owned cells are read (the ghosts are the fluid's own business).
 struct CouplingInputs {
-  CellField& eps;                 // eps^{n+1}
-  CellField& K;                   // sum beta / (rho_f V_cell) (1/s)
-  std::array<CellField, 3>& KUp;  // sum beta u_p / (rho_f V_cell) (m/s^2)
+  const CellField& eps;                 // eps^{n+1}
+  const CellField& K;                   // sum beta / (rho_f V_cell) (1/s)
+  const std::array<CellField, 3>& KUp;  // sum beta u_p / (rho_f V_cell) (m/s^2)
 };
 
 struct FluidFields {
@@ -73,26 +77,26 @@ class FluidSolver {
   FluidSolver(const FluidSolver&) = delete;
   FluidSolver& operator=(const FluidSolver&) = delete;
 
-  /// Everything, writable (tests, restart): the ghosts and the rates count as stale after it.
-  FluidFields& fields();
+  /// The state, read only (no effect on the solver).
   const FluidFields& fields() const;
-  /// The coupling's inputs of the next step, to write on owned cells: the next step rebuilds
-  /// the pressure matrix and refreshes every ghost layer that depends on them.
-  CouplingInputs couplingInputs();
-  /// The inputs written are also the state at the start: eps^n <- eps^{n+1} (the first step sees
-  /// no d(eps)/dt from the constructor's eps = 1), and eps gets its ghosts now (one exchange), so
-  /// that the coupling can read it before the first step. Collective; once, before the first
-  /// step.
-  void startCoupling();
-  /// For inputs written through fields(): eps or K changed (what couplingInputs() implies).
-  void markCoefficientsChanged();
-  /// For inputs written through fields(): eps^n <- eps, ghosts as they are (startCoupling()
-  /// without the exchange).
+  /// The state, to write outside a step (initial conditions, tests, restart): the next step
+  /// refreshes every ghost layer and rebuilds the pressure matrix, and nextDt() recomputes the
+  /// velocity rate.
+  FluidFields& edit();
+  /// The coupling's first inputs are also the state at the start: eps^n <- eps^{n+1} (the first
+  /// step sees no d(eps)/dt from the constructor's eps = 1), and eps gets its ghosts now (one
+  /// exchange), so that the coupling can read it before the first step. Collective; once,
+  /// before the first step.
+  void startCoupling(const CouplingInputs& in);
+  /// For eps written through edit(): eps^n <- eps, ghosts as they are (startCoupling() without
+  /// the exchange).
   void syncEpsOld();
-  /// Advance one step of size dt.
+  /// Advance one step of size dt with the coupling's inputs of this step (their owned cells).
+  void step(double dt, const CouplingInputs& in);
+  /// Advance one step of size dt, the inputs as they are (fluid-only runs).
   void step(double dt);
   /// The time step the case asks for now: fixed, or adaptive from CFL and viscous limits.
-  /// Collective when adaptive and the fields were written through fields() since the last step
+  /// Collective when adaptive and the fields were written through edit() since the last step
   /// (the velocity rate is then recomputed); call it on every rank.
   double nextDt() const;
   double time() const;
@@ -107,7 +111,7 @@ class FluidSolver {
   /// faceLayout(dec, d, 0) (owned faces; faces the predictor does not advance hold 0).
   const std::array<Field3<double>, 3>& history() const;
   std::array<Field3<double>, 3>& history();
-  /// Restore: after the owned values of fields() (u, p, eps, epsOld, K, KUp) and of history()
+  /// Restore: after the owned values of edit() (u, p, eps, epsOld, K, KUp) and of history()
   /// were overwritten (e.g. read from a checkpoint on any decomposition), refresh every ghost
   /// layer as the step leaves them and take the counters; the next step rebuilds the pressure
   /// matrix. With the same decomposition the run then continues bitwise identically. Collective.
@@ -148,11 +152,17 @@ Json runFluidOnly(FluidSolver& solver, const Config& cfg);
 /// Walks the fluid's restart table in one fixed order: fn(const FluidSolver::StateField&,
 /// Field3<double>* const* arrays): three slots, the first `components` hold the arrays (const
 /// Field3 for a const solver).
-/// The non-const form goes through fields(), so the ghosts and rates count as stale after it.
+/// The non-const form goes through edit(), so the ghosts and rates count as stale after it.
 template <class Solver, class Fn>
 void forEachStateField(Solver& fluid, Fn&& fn) {
   using SF = FluidSolver::StateField;
-  auto& f = fluid.fields();
+  auto& f = [&]() -> auto& {
+    if constexpr (std::is_const_v<Solver>)
+      return fluid.fields();
+    else
+      return fluid.edit();
+  }
+  ();
   auto& h = fluid.history();
   using Ptr = decltype(&f.p);
   // always three slots (the unused ones null): `components` says how many hold arrays
