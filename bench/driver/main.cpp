@@ -25,6 +25,7 @@
 #include "coloc/core/provenance.hpp"
 #include "plan.hpp"
 #include "run.hpp"
+#include "stop_signals.hpp"
 
 // hypre (2.26) answers a failed allocation with MPI_Abort(MPI_COMM_WORLD, -1) and no way to
 // intercept it through its API: the driver's own MPI_Abort (the MPI profiling interface; the

@@ -30,10 +30,6 @@ inline constexpr int kIoErrorStatus = 4;
 /// (130 for SIGINT, 143 for SIGTERM).
 inline constexpr int kInterruptedBase = 128;
 
-/// SIGTERM/SIGINT ask the run to stop after the current step (a second one exits at once);
-/// SIGXFSZ is ignored (a file-size limit is an I/O error). Called by main() for `coloc run`.
-void installStopSignals();
-
 /// Returns the process exit status (above). Every failure is agreed by every rank at the end of
 /// the phase it happened in and printed once by rank 0; DIR/report.json then says how the run
 /// ended. Throws coloc::Error (on every rank) for an input error found before the output folder
