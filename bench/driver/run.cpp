@@ -112,7 +112,7 @@ class Run {
   int prepareFolders();
   int setUp();
   int stepLoop();
-  int finish();
+  int finish(std::optional<SnapshotJob>& snapshot);
 
  private:
   /// The parts of a step, for the message of a failure (the verdict's `where`).
@@ -487,9 +487,9 @@ int Run::stopBySignal(int sig) {
   return kInterruptedBase + sig;
 }
 
-/// 4. The final state, unless the last step wrote it already; then the report, the summary and
-/// the snapshot.
-int Run::finish() {
+/// 4. The final state, unless the last step wrote it already; then the report and the summary;
+/// the snapshot is left to main() (rank 0), after MPI_Finalize.
+int Run::finish(std::optional<SnapshotJob>& snapshot) {
   if (checkpoint_.intervalSteps > 0 && !checkpoint_.due(simulation_->steps())) {
     const std::string path = checkpoint_.pathAt(simulation_->steps());
     const auto v = phase(channel_, kIoErrorStatus, [&] { simulation_->writeCheckpoint(path); });
@@ -510,7 +510,7 @@ int Run::finish() {
   const std::string path = writeReport("ok", 0, "", lastCheckpoint_, 0);
   if (path.empty()) return kIoErrorStatus;
   if (root_) printSummary(path);
-  if (world_.isRoot()) drawSnapshot(cfg_, outDir_, opts_.quiet, log_);
+  if (world_.isRoot()) snapshot = snapshotDue(cfg_, outDir_, opts_.quiet);
   return 0;
 }
 
@@ -547,12 +547,12 @@ void Run::printSummary(const std::string& reportPath) {
 
 }  // namespace
 
-int runCase(const Comm& world, const RunOptions& opts) {
+int runCase(const Comm& world, const RunOptions& opts, std::optional<SnapshotJob>& snapshot) {
   Run run(world, opts);
   if (const int code = run.prepareFolders()) return code;
   if (const int code = run.setUp()) return code;
   if (const int code = run.stepLoop()) return code;
-  return run.finish();
+  return run.finish(snapshot);
 }
 
 }  // namespace coloc
