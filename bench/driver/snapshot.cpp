@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "coloc/io/output.hpp"
+#include "data_dir.hpp"
 #include "run_log.hpp"
 
 extern char** environ;
@@ -25,9 +26,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// bench/scripts/snapshot.py of the source tree.
+/// snapshot.py of the installed data (PREFIX/share/coloc/scripts) or of the source tree.
 fs::path snapshotScript() {
-  return fs::path(COLOC_SOURCE_DIR) / "bench" / "scripts" / "snapshot.py";
+  return dataDir() / "scripts" / "snapshot.py";
 }
 
 /// The exit status of a child as a shell gives it: its own, or 128 + the signal that ended it.
@@ -112,6 +113,8 @@ int drawSnapshot(const SnapshotJob& job) {
   if (!job.png.empty()) args.insert(args.end(), {"--png", job.png});
   if (!job.report.empty()) args.insert(args.end(), {"--report", job.report});
   if (job.full) args.emplace_back("--full");
+  // Which script drew it (the installed one or the source tree's), in the run's log only.
+  if (job.ofRun) log.file("coloc: drawing snapshot.png with {}\n", script.string());
   // What the script says goes to the terminal (unless quiet) and the log.
   std::string error;
   const int rc = runCapturing(
