@@ -6,6 +6,8 @@
 //   coloc check CASE.json [--ranks N] [--set ...]   validate, show layouts/memory/time steps
 //   coloc plan CASE.json --ranks 28,56,1024 [--strategy S ...] [--set ...] [--out DIR]
 //                         layouts, work and traffic per rank for rank counts not run (one process)
+//   coloc snapshot OUT_DIR [--png FILE] [--full] [--step N]
+//                         snapshot.png of a finished run's last output (no MPI, no mpirun)
 //   coloc --help
 //
 // Errors in the input are found identically on every rank: rank 0 prints one message naming the
@@ -16,7 +18,9 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <string_view>
 
 #include "check.hpp"
 #include "coloc/core/comm.hpp"
@@ -25,6 +29,8 @@
 #include "coloc/core/provenance.hpp"
 #include "plan.hpp"
 #include "run.hpp"
+#include "snapshot.hpp"
+#include "stop_signals.hpp"
 
 // hypre (2.26) answers a failed allocation with MPI_Abort(MPI_COMM_WORLD, -1) and no way to
 // intercept it through its API: the driver's own MPI_Abort (the MPI profiling interface; the
@@ -35,8 +41,11 @@ extern "C" int MPI_Abort(MPI_Comm comm, int errorcode) {
   return PMPI_Abort(comm, errorcode);
 }
 
-int main(int argc, char** argv) {
-  coloc::MpiSession mpi(&argc, &argv);
+namespace {
+
+/// Every subcommand but `coloc snapshot`, between MPI_Init and MPI_Finalize (main()). Returns
+/// the exit status; a run that asks for its picture sets `snapshot` (rank 0).
+int mpiMain(int argc, char** argv, std::optional<coloc::SnapshotJob>& snapshot) {
   const coloc::Comm world = coloc::Comm::world();
 
   CLI::App app{
@@ -99,6 +108,9 @@ int main(int argc, char** argv) {
       ->take_all()
       ->allow_extra_args(false);
   plan->add_option("--out", planOpts.outDir, "output directory (default: out/<case name>/plan)");
+  // Listed here for --help; main() runs it before MPI_Init.
+  coloc::SnapshotJob snapshotJob;
+  coloc::addSnapshotCommand(app, snapshotJob);
 
   try {
     app.parse(argc, argv);
@@ -137,6 +149,10 @@ int main(int argc, char** argv) {
       }
       return world.max(status);
     }
+    if (app.got_subcommand("snapshot")) {  // (only when main() did not see it first)
+      if (world.isRoot()) snapshot = snapshotJob;
+      return 0;
+    }
     if (app.got_subcommand("plan")) {
       if (world.size() != 1)
         throw coloc::Error("coloc plan runs in one process: start it without mpirun -n N");
@@ -158,7 +174,7 @@ int main(int argc, char** argv) {
   std::string err;
   int code = 0;
   try {
-    return coloc::runCase(world, opts);
+    return coloc::runCase(world, opts, snapshot);
   } catch (const coloc::IoError& e) {
     err = e.what();
     code = coloc::kIoErrorStatus;
@@ -172,4 +188,30 @@ int main(int argc, char** argv) {
   const auto v = channel.agree(err, code);
   if (world.isRoot()) std::fprintf(stderr, "coloc: error: %s\n", v.message.c_str());
   return v.code;
+}
+
+}  // namespace
+
+// The snapshot (output.snapshot, `coloc snapshot`) runs a Python script in a child process. A
+// child started from inside a live MPI process is not safe on every fabric: fork() copies the
+// registered (pinned) memory of InfiniBand verbs and similar transports copy-on-write, and Open
+// MPI warns of it or the child corrupts the parent's transfers. So the run only records on rank 0
+// that a picture is due, and main() draws it after MPI_Finalize, when no fabric state is left,
+// through posix_spawn (no shell; glibc starts the child without copying the address space).
+// `coloc snapshot` is post-processing of a finished job: it is dispatched before MPI_Init and
+// needs no MPI at all (a login node without a launcher, no singleton start-up).
+int main(int argc, char** argv) {
+  if (argc > 1 && std::string_view(argv[1]) == "snapshot")
+    return coloc::snapshotCommand(argc, argv);
+  std::optional<coloc::SnapshotJob> snapshot;
+  int status = 0;
+  {
+    coloc::MpiSession mpi(&argc, &argv);
+    status = mpiMain(argc, argv, snapshot);
+  }  // MPI_Finalize
+  if (snapshot) {
+    const int drawn = coloc::drawSnapshot(*snapshot);
+    if (status == 0) status = drawn;
+  }
+  return status;
 }

@@ -2,10 +2,12 @@
 // write the report.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "coloc/core/comm.hpp"
+#include "snapshot.hpp"
 
 namespace coloc {
 
@@ -30,15 +32,13 @@ inline constexpr int kIoErrorStatus = 4;
 /// (130 for SIGINT, 143 for SIGTERM).
 inline constexpr int kInterruptedBase = 128;
 
-/// SIGTERM/SIGINT ask the run to stop after the current step (a second one exits at once);
-/// SIGXFSZ is ignored (a file-size limit is an I/O error). Called by main() for `coloc run`.
-void installStopSignals();
-
 /// Returns the process exit status (above). Every failure is agreed by every rank at the end of
 /// the phase it happened in and printed once by rank 0; DIR/report.json then says how the run
 /// ended. Throws coloc::Error (on every rank) for an input error found before the output folder
 /// is known (the case file or the command line).
-int runCase(const Comm& world, const RunOptions& opts);
+/// A run that ends well and asks for a picture (output.snapshot) sets `snapshot` on rank 0:
+/// main() draws it after MPI_Finalize (snapshot.hpp).
+int runCase(const Comm& world, const RunOptions& opts, std::optional<SnapshotJob>& snapshot);
 /// A library stopped the job with MPI_Abort(-1) (hypre does when an allocation fails): called by
 /// the driver's MPI_Abort (main.cpp) on the rank that called it. Prints the error, writes
 /// report.json ("failed", out_of_memory) from this rank alone when a run's output folder is known,

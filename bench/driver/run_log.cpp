@@ -28,6 +28,16 @@ void RunLog::open(const std::string& path, bool append) {
   pending_.shrink_to_fit();
 }
 
+void RunLog::reopen(const std::string& path) {
+  if (!root_) return;
+  if (file_) std::fclose(file_);
+  file_ = std::fopen(path.c_str(), "ae");
+  if (!file_) throw IoError("cannot open the log file '" + path + "': " + std::strerror(errno));
+  std::fwrite(pending_.data(), 1, pending_.size(), file_);
+  std::fflush(file_);
+  pending_.clear();
+}
+
 void RunLog::write(std::FILE* stream, fmt::string_view format, fmt::format_args args) {
   if (!root_) return;
   text_.clear();  // keeps its capacity

@@ -24,6 +24,9 @@ class RunLog {
   /// Rank 0: opens `path` (new, or appended to when `append`: a restart continuing its run in
   /// the same folder). Throws IoError when it cannot be created.
   void open(const std::string& path, bool append);
+  /// Rank 0: appends to a log a run has closed, without the restart's mark (the snapshot that
+  /// main() draws after MPI_Finalize: snapshot.hpp). Throws IoError when it cannot be opened.
+  void reopen(const std::string& path);
   /// To stdout and the log.
   template <class... T>
   void out(fmt::format_string<T...> format, T&&... args) {
