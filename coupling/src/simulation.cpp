@@ -2,15 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <numbers>
-#include <sstream>
 #include <utility>
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/fault.hpp"
 #include "coloc/coupling/checkpoint.hpp"
-#include "coloc/coupling/self_velocity.hpp"
 #include "coloc/partition/remap.hpp"
 #include "coloc/partition/setup.hpp"
 #include "particle_coupling.hpp"
@@ -281,7 +277,8 @@ void Simulation::smoothField(CellField& f) {
 }
 
 void Simulation::updateFluidCoefficients() {
-  // eps^{n+1} into the fluid's one eps array (owned cells); its step fills the ghosts.
+  // eps^{n+1} on the owned cells, the fluid's input of the step (advanceFluid hands it over;
+  // the fluid's step fills its own ghosts).
   ScopedPhase t(timers_, Phase::CouplingDeposit);
   const double epsMin = coupling_->minFluidFraction();
   double solid = 0;
