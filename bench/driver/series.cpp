@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -38,7 +39,11 @@ Series::Series(const Comm& comm, const std::string& path, coupling::Simulation& 
          ++i)
       ids_.push_back(i);
   }
-  for (std::size_t c = 0; c < ids_.size(); ++c) column_[ids_[c]] = c;
+  if (!ids_.empty())
+    column_.assign(static_cast<std::size_t>(*std::max_element(ids_.begin(), ids_.end())) + 1, -1);
+  for (std::size_t c = 0; c < ids_.size(); ++c)
+    column_[static_cast<std::size_t>(ids_[c])] = static_cast<long long>(c);
+  row_.resize(9 * ids_.size());
   diagEvery_ = cfg.integer("output.diagnostics_interval");
   if (diagEvery_ == 0) diagEvery_ = cfg.integer("output.interval_steps");
   if (!comm_.isRoot()) return;
@@ -67,13 +72,15 @@ Series::~Series() {
 }
 
 std::optional<BedDiagnostics> Series::record(coupling::Simulation& sim) {
-  std::vector<double> row(9 * ids_.size(), 0.0);
-  if (auto* dem = sim.particles()) {
+  std::vector<double>& row = row_;
+  std::fill(row.begin(), row.end(), 0.0);
+  if (auto* dem = sim.particles(); dem && !column_.empty()) {
     const auto& p = dem->particles();
+    const auto n = static_cast<std::int64_t>(column_.size());
     for (std::size_t i = 0; i < p.nOwned; ++i) {
-      const auto it = column_.find(p.id[i]);
-      if (it == column_.end()) continue;
-      double* r = row.data() + 9 * it->second;
+      const std::int64_t id = p.id[i];
+      if (id < 0 || id >= n || column_[static_cast<std::size_t>(id)] < 0) continue;
+      double* r = row.data() + 9 * column_[static_cast<std::size_t>(id)];
       for (int d = 0; d < 3; ++d) {
         r[d] = p.x[d][i];
         r[3 + d] = p.v[d][i];

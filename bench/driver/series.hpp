@@ -1,7 +1,6 @@
 // The per-step time series of a run, OUT/series.csv (docs/output.md).
 #pragma once
 
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,7 +43,10 @@ class Series {
   const Comm& comm_;
   const Config& cfg_;
   std::vector<long long> ids_;
-  std::map<long long, std::size_t> column_;
+  /// The column of particle id (-1: none), for ids 0 .. column_.size() - 1 (the largest id in
+  /// the series): one comparison rejects the other particles.
+  std::vector<long long> column_;
+  std::vector<double> row_;  // the step's 9 values per particle (reused)
   long long diagEvery_ = 0;
   int fd_ = -1;
   std::string path_, line_, error_;
