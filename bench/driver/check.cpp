@@ -35,12 +35,6 @@ struct Plan {
   double imbalance = 0;  // largest / mean block cost (the table's)
 };
 
-std::vector<IndexBox> boxesOf(const Blocks& b) {
-  std::vector<IndexBox> out;
-  for (int r = 0; r < b.size(); ++r) out.push_back({b.lo(r), b.hi(r)});
-  return out;
-}
-
 std::string shapeOf(const Blocks& b) {
   return std::to_string(b.dims[0]) + "x" + std::to_string(b.dims[1]) + "x" +
          std::to_string(b.dims[2]);
@@ -207,27 +201,24 @@ int checkCase(const CheckOptions& opts) {
   for (std::size_t c = 0; c < caseCost.size(); ++c)
     caseCost[c] = caseModel.perCell + caseModel.perParticle * particlesPerCell[c];
   std::vector<Plan> plans;
-  for (const char* s : {"uniform", "balanced", "independent", "tiled"}) {
+  const double haloCell = cfg.number("partition.cost.halo_cell");
+  for (const PartitionStrategy* s : PartitionStrategy::all()) {
     Plan p;
-    p.strategy = s;
+    p.strategy = s->name();
     try {
-      // As Simulation::chooseLayouts: a fluid-only run keeps the uniform blocks (tiled: boxes
-      // of equal cell counts).
-      const std::string used =
-          mode == RunMode::FluidOnly && p.strategy != "tiled" ? "uniform" : p.strategy;
-      if (used == "tiled") {
-        const TiledLayout t = tiledStrategy(in, caseCost, cfg.number("partition.cost.halo_cell"));
-        p.fluid = p.particles = t.layout.box;
-        p.fluidShape = p.particleShape = std::to_string(N) + " boxes";
-      } else {
-        const StrategyBlocks b = chooseBlocks(used, in, caseCost, particlesPerCell);
-        const Blocks& pb = b.particles ? *b.particles : b.fluid;
-        p.fluid = boxesOf(b.fluid);
-        p.particles = boxesOf(pb);
-        p.fluidShape = shapeOf(b.fluid);
+      // As a run chooses (PartitionStrategy::layoutFor): a fluid-only run keeps the start layout.
+      const StrategyLayout l =
+          s->layoutFor(mode, in, CellWork{caseCost, particlesPerCell, haloCell});
+      p.fluid = l.fluid.box;
+      p.particles = l.particles.box;
+      if (l.isGrid()) {
+        const Blocks& pb = l.particleBlocks ? *l.particleBlocks : *l.fluidBlocks;
+        p.fluidShape = shapeOf(*l.fluidBlocks);
         p.particleShape = shapeOf(pb);
-        p.fluidCuts = b.fluid.cuts;
+        p.fluidCuts = l.fluidBlocks->cuts;
         p.particleCuts = pb.cuts;
+      } else {
+        p.fluidShape = p.particleShape = std::to_string(N) + " boxes";
       }
     } catch (const Error& e) {
       p.error = e.what();

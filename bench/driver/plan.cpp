@@ -40,12 +40,12 @@ int planCase(const PlanOptions& opts) {
   const double t0 = MPI_Wtime();
   const Comm self(MPI_COMM_SELF);
   const Config cfg = Config::load(self, opts.casePath, opts.overrides, coupling::caseSchema());
-  std::vector<std::string> strategies = opts.strategies;
-  if (strategies.empty()) strategies = {"uniform", "balanced", "independent"};
-  for (const auto& s : strategies)
-    if (s != "uniform" && s != "balanced" && s != "independent" && s != "tiled")
-      throw ConfigError("partition.strategy", "--strategy: unknown strategy '" + s +
-                                                  "' (uniform, balanced, independent, tiled)");
+  std::vector<const PartitionStrategy*> strategies;
+  for (const auto& s : opts.strategies)
+    strategies.push_back(&PartitionStrategy::named(s, "--strategy"));
+  if (strategies.empty())
+    for (const PartitionStrategy* s : PartitionStrategy::all())
+      if (s->plannedByDefault()) strategies.push_back(s);
   const auto ranks = parseRankList(opts.ranks);
   const std::string outDir =
       opts.outDir.empty() ? (std::filesystem::path("out") / cfg.string("name") / "plan").string()
@@ -65,9 +65,10 @@ int planCase(const PlanOptions& opts) {
   std::printf("%-12s %6s %-10s %-10s %9s %12s %12s %12s %12s %12s\n", "strategy", "ranks", "fluid",
               "dem", "imbalance", "max cells", "max parts", "halo MB/st", "ghost MB/st",
               "inter MB/st");
-  for (const auto& strategy : strategies)
+  for (const PartitionStrategy* s : strategies)
     for (const int n : ranks) {
-      const coupling::LayoutPlan L = coupling::planLayout(pc, strategy, n);
+      const std::string strategy(s->name());
+      const coupling::LayoutPlan L = coupling::planLayout(pc, *s, n);
       Json j = {{"strategy", strategy}, {"ranks", n}};
       if (!L.error.empty()) {
         j["error"] = L.error;

@@ -16,6 +16,7 @@
 #include "coloc/io/checkpoint_file.hpp"
 #include "coloc/io/h5io.hpp"
 #include "coloc/partition/setup.hpp"
+#include "coloc/partition/strategy.hpp"
 
 namespace coloc::coupling {
 
@@ -345,7 +346,7 @@ MemoryEstimate estimateMemory(const Config& cfg, Int3 blockCells, double particl
 
 Int3 largestUniformBlock(const Config& cfg, int ranks) {
   const GlobalGrid g = gridFromConfig(cfg);
-  if (cfg.string("partition.strategy") == "tiled") {
+  if (!PartitionStrategy::named(cfg.string("partition.strategy")).gridLayout()) {
     // No process grid: the boxes have about cells / ranks cells; estimated as cubes of that
     // many cells (the bisection cuts the longest axis first), at least one cell thick.
     const double side = std::cbrt(static_cast<double>(g.cellCount()) / std::max(ranks, 1));

@@ -129,7 +129,8 @@ CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
       info.grid.periodic[d] = p[d] != 0.0;
     }
     info.strategy = f.attributeString("/partition", "strategy");
-    if (info.strategy == "tiled") {
+    if (!PartitionStrategy::named(info.strategy)
+             .gridLayout()) {  // boxes, not a process grid's cuts
       const auto lo = asInts(f.attributeDoubles("/partition/fluid", "boxes_lo"));
       const auto hi = asInts(f.attributeDoubles("/partition/fluid", "boxes_hi"));
       if (lo.size() != hi.size() || lo.size() != static_cast<std::size_t>(3 * info.ranks))

@@ -1,6 +1,6 @@
-// The strategy choice of a run (Simulation::chooseLayouts): partition.strategy's blocks from the
-// cost probe (layouts.hpp), with the cost weights measured by a short run when
-// partition.calibrate_steps asks for it.
+// The strategy choice of a run (Simulation::chooseLayouts): the PartitionStrategy
+// partition.strategy names (partition/strategy.hpp), its blocks from the cost probe (layouts.hpp),
+// with the cost weights measured by a short run when partition.calibrate_steps asks for it.
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,57 +40,42 @@ CostModel calibrate(const Config& cfg, const Decomposition& uniform, long long s
   return m;
 }
 
-/// The tiled strategy, for any rank count (no process grid is needed on the way): boxes of
-/// equal cell counts first, the layout of a fluid-only run and where the calibration runs and
-/// the cost probe counts the particles; then the boxes of the modelled cost.
-Layouts chooseTiled(const Comm& world, const Config& cfg) {
-  const GlobalGrid grid = gridFromConfig(cfg);
-  std::vector<double> cells;
-  if (world.isRoot()) cells.assign(static_cast<std::size_t>(grid.cellCount()), 1.0);
-  Layouts equal = tiledLayoutsOnRoot(world, cfg, cells, CostModel{1.0, 0.0});
-  if (runMode(cfg) == RunMode::FluidOnly) return equal;
-  CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
-  if (cfg.integer("partition.calibrate_steps") > 0)
-    model = calibrate(cfg, equal.fluid, cfg.integer("partition.calibrate_steps"));
-  const std::vector<double> cost = probeCellCostsOnRoot(cfg, equal.fluid, model);
-  return tiledLayoutsOnRoot(world, cfg, cost, model);
-}
-
 }  // namespace
 
 Layouts chooseLayouts(const Comm& world, const Config& cfg) {
-  const std::string strategy = cfg.string("partition.strategy");
-  if (cfg.integer("partition.rebalance_interval") > 0 && strategy != "balanced" &&
-      strategy != "tiled")
+  const PartitionStrategy& strategy = PartitionStrategy::named(cfg.string("partition.strategy"));
+  if (cfg.integer("partition.rebalance_interval") > 0 && !strategy.balancesCost())
     throw ConfigError("partition.rebalance_interval",
                       "re-balancing moves the cuts of the balanced or tiled strategies: set "
                       "partition.strategy to balanced or tiled (it is '" +
-                          strategy + "')");
-  if (strategy == "tiled") return chooseTiled(world, cfg);
-  const Decomposition uniform = decompositionFromConfig(world, cfg);
-  Layouts L{uniform, std::nullopt, strategy, CostModel{}, 1.0, 1.0};
-  if (strategy == "uniform" || runMode(cfg) == RunMode::FluidOnly) return L;
-  const bool independent = strategy == "independent";
+                          std::string(strategy.name()) + "')");
+  // The layout before any cost is known (the same on every rank, no communication): a fluid-only
+  // run keeps it; the calibration runs and the cost probe counts the particles on it.
+  const StrategyInput in = strategyInput(cfg, world.size());
+  const double haloCell = cfg.number("partition.cost.halo_cell");
+  // (Tiled boxes come from a bisection over every global cell: on rank 0 alone.)
+  const auto first = [&] { return strategy.startLayout(in, haloCell); };
+  Layouts start = runLayouts(world, strategy,
+                             strategy.gridLayout() ? first() : layoutOnRoot(world, in.grid, first),
+                             CostModel{});
+  if (runMode(cfg) == RunMode::FluidOnly) return start;
+  if (!strategy.balancesCost() && !strategy.ownParticleBlocks()) return start;  // uniform
   CostModel model{cfg.number("partition.cost.cell"), cfg.number("partition.cost.particle")};
-  if (!independent && cfg.integer("partition.calibrate_steps") > 0)
-    model = calibrate(cfg, uniform, cfg.integer("partition.calibrate_steps"));
+  if (strategy.balancesCost() && cfg.integer("partition.calibrate_steps") > 0)
+    model = calibrate(cfg, start.fluid, cfg.integer("partition.calibrate_steps"));
   // Where the particles start (the cost probe: the case's generator, no solver), counted per
   // cell on rank 0 only (cellCostsOnRoot), which chooses the blocks and sends them to every
-  // rank: no rank but the root holds anything of the global cell count.
-  // independent: the DEM's blocks are balanced by particle count.
-  const std::vector<double> cost =
-      probeCellCostsOnRoot(cfg, uniform, independent ? CostModel{0.0, 1.0} : model);
-  const StrategyInput in = strategyInput(cfg, world.size());
-  const StrategyBlocks b = chooseBlocksOnRoot(world, strategy, in, cost, independent);
-  if (independent) {
-    L.particles = Decomposition::fromCuts(world, in.grid, b.particles->cuts);
-    return L;
-  }
-  L.fluid = Decomposition::fromCuts(world, in.grid, b.fluid.cuts);
-  L.model = model;
-  L.modelledImbalance = b.modelledImbalance;
-  L.uniformImbalance = b.uniformImbalance;
-  return L;
+  // rank: no rank but the root holds anything of the global cell count. Particle blocks of
+  // their own are balanced by count.
+  const std::vector<double> cost = probeCellCostsOnRoot(
+      cfg, start.fluid, strategy.ownParticleBlocks() ? CostModel{0.0, 1.0} : model);
+  const std::vector<double> none;
+  const StrategyLayout chosen = layoutOnRoot(world, in.grid, [&] {
+    return strategy.layout(in, strategy.ownParticleBlocks() ? CellWork{none, cost, haloCell}
+                                                            : CellWork{cost, none, haloCell});
+  });
+  if (strategy.ownParticleBlocks()) model = CostModel{};
+  return runLayouts(world, strategy, chosen, model);
 }
 
 }  // namespace coloc::coupling

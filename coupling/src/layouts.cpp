@@ -24,25 +24,62 @@ StrategyInput strategyInput(const Config& cfg, int ranks) {
   return in;
 }
 
-StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
-                                  const StrategyInput& in, const std::vector<double>& cost,
-                                  bool costIsCount) {
-  StrategyBlocks b;
-  b.strategy = strategy;
+const PartitionStrategy& strategyOf(const Layouts& L) {
+  return PartitionStrategy::named(L.strategy);
+}
+
+namespace {
+
+void packBlocks(const Blocks& b, std::vector<int>& out) {
+  out.insert(out.end(), b.dims.begin(), b.dims.end());
+  for (int d = 0; d < 3; ++d) out.insert(out.end(), b.cuts[d].begin(), b.cuts[d].end());
+}
+
+Blocks unpackBlocks(const std::vector<int>& in, std::size_t& q) {
+  Blocks b;
+  for (int d = 0; d < 3; ++d) b.dims[d] = in.at(q++);
+  for (int d = 0; d < 3; ++d) {
+    const auto n = static_cast<std::size_t>(b.dims[d]) + 1;
+    b.cuts[d].assign(in.begin() + static_cast<std::ptrdiff_t>(q),
+                     in.begin() + static_cast<std::ptrdiff_t>(q + n));
+    q += n;
+  }
+  return b;
+}
+
+BoxLayout boxesOf(const GlobalGrid& g, const Blocks& b) {
+  BoxLayout l;
+  l.grid = g;
+  for (int r = 0; r < b.size(); ++r) l.box.push_back({b.lo(r), b.hi(r)});
+  return l;
+}
+
+}  // namespace
+
+StrategyLayout layoutOnRoot(const Comm& comm, const GlobalGrid& grid,
+                            const std::function<StrategyLayout()>& choose) {
+  StrategyLayout l;
   std::string err;
+  // [process grid?, own particle blocks?], then the blocks (dims, cuts) or 6 ints a box
   std::vector<int> packed;
-  double imb[2] = {1.0, 1.0};
+  double num[4] = {1.0, 1.0, 0.0, 0.0};
   if (comm.isRoot()) {
     try {
-      b = costIsCount ? chooseBlocks(strategy, in, {}, cost) : chooseBlocks(strategy, in, cost, {});
-      for (const Blocks* blk : {&b.fluid, b.particles ? &*b.particles : nullptr}) {
-        if (!blk) continue;
-        for (int d = 0; d < 3; ++d) packed.push_back(blk->dims[d]);
-        for (int d = 0; d < 3; ++d)
-          packed.insert(packed.end(), blk->cuts[d].begin(), blk->cuts[d].end());
+      l = choose();
+      packed = {l.isGrid() ? 1 : 0, l.particleBlocks ? 1 : 0};
+      if (l.isGrid()) {
+        packBlocks(*l.fluidBlocks, packed);
+        if (l.particleBlocks) packBlocks(*l.particleBlocks, packed);
+      } else {
+        for (const IndexBox& b : l.fluid.box) {
+          packed.insert(packed.end(), b.lo.begin(), b.lo.end());
+          packed.insert(packed.end(), b.hi.begin(), b.hi.end());
+        }
       }
-      imb[0] = b.modelledImbalance;
-      imb[1] = b.uniformImbalance;
+      num[0] = l.modelledImbalance;
+      num[1] = l.uniformImbalance;
+      num[2] = l.maxCost;
+      num[3] = l.meanCost;
     } catch (const Error& e) {
       err = e.what();
     }
@@ -53,87 +90,43 @@ StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
   comm.broadcast(std::span<int>(&len, 1));
   packed.resize(static_cast<std::size_t>(len));
   comm.broadcast(std::span<int>(packed));
-  comm.broadcast(std::span<double>(imb, 2));
-  if (comm.isRoot()) return b;
-  std::size_t q = 0;
-  const auto unpack = [&](Blocks& blk) {
-    for (int d = 0; d < 3; ++d) blk.dims[d] = packed[q++];
-    for (int d = 0; d < 3; ++d) {
-      blk.cuts[d].assign(packed.begin() + static_cast<std::ptrdiff_t>(q),
-                         packed.begin() + static_cast<std::ptrdiff_t>(q) + blk.dims[d] + 1);
-      q += static_cast<std::size_t>(blk.dims[d]) + 1;
+  comm.broadcast(std::span<double>(num, 4));
+  if (comm.isRoot()) return l;
+  l.modelledImbalance = num[0];
+  l.uniformImbalance = num[1];
+  l.maxCost = num[2];
+  l.meanCost = num[3];
+  std::size_t q = 2;
+  if (packed.at(0) == 1) {
+    l.fluidBlocks = unpackBlocks(packed, q);
+    l.fluid = boxesOf(grid, *l.fluidBlocks);
+    if (packed.at(1) == 1) l.particleBlocks = unpackBlocks(packed, q);
+    l.particles = l.particleBlocks ? boxesOf(grid, *l.particleBlocks) : l.fluid;
+  } else {
+    l.fluid.grid = grid;
+    l.fluid.box.resize((packed.size() - 2) / 6);
+    for (auto& b : l.fluid.box) {
+      for (int d = 0; d < 3; ++d) b.lo[d] = packed[q++];
+      for (int d = 0; d < 3; ++d) b.hi[d] = packed[q++];
     }
-  };
-  unpack(b.fluid);
-  if (q < packed.size()) {
-    b.particles.emplace();
-    unpack(*b.particles);
+    l.particles = l.fluid;
   }
-  b.modelledImbalance = imb[0];
-  b.uniformImbalance = imb[1];
-  return b;
+  return l;
 }
 
-Layouts tiledLayoutsOnRoot(const Comm& comm, const Config& cfg, const std::vector<double>& cost,
-                           const CostModel& model, const Decomposition* current,
-                           std::array<double, 2>* verdict) {
-  const StrategyInput in = strategyInput(cfg, comm.size());
-  const int P = comm.size();
-  std::vector<int> packed(static_cast<std::size_t>(6 * P));
-  double imb[4] = {1.0, 1.0, 1.0, 1.0};  // new, uniform, current, gain
-  std::string err;
-  if (comm.isRoot()) {
-    try {
-      const double surface = cfg.number("partition.cost.halo_cell");
-      const TiledLayout t = tiledStrategy(in, cost, surface);
-      if (current) {
-        TiledLayout now;
-        now.layout = boxLayoutOf(*current);
-        TiledOptions opt;
-        opt.surfaceCost = surface;
-        evaluateBoxes(cost, opt, now);
-        imb[2] = now.imbalance();
-        imb[3] = t.maxCost > 0 ? now.maxCost / t.maxCost : 1.0;
-      }
-      for (int r = 0; r < P; ++r)
-        for (int d = 0; d < 3; ++d) {
-          packed[static_cast<std::size_t>(6 * r + d)] =
-              t.layout.box[static_cast<std::size_t>(r)].lo[d];
-          packed[static_cast<std::size_t>(6 * r + 3 + d)] =
-              t.layout.box[static_cast<std::size_t>(r)].hi[d];
-        }
-      imb[0] = t.imbalance();
-      imb[1] = std::numeric_limits<double>::quiet_NaN();  // no process grid: null in reports
-      try {
-        BalancedLayout even;
-        const Blocks u = uniformBlocks(in);
-        even.dims = u.dims;
-        even.cuts = u.cuts;
-        evaluateLayout(in.grid, cost, even);
-        imb[1] = even.imbalance();
-      } catch (const ConfigError&) {
-      }
-    } catch (const Error& e) {
-      err = e.what();
-    }
-  }
-  err = comm.broadcast(err);
-  if (!err.empty()) throw Error(err);
-  comm.broadcast(std::span<int>(packed));
-  comm.broadcast(std::span<double>(imb, 4));
-  if (verdict) *verdict = {imb[2], imb[3]};
-  std::vector<Int3> lo(static_cast<std::size_t>(P)), hi(lo.size());
-  for (int r = 0; r < P; ++r)
-    for (int d = 0; d < 3; ++d) {
-      lo[static_cast<std::size_t>(r)][d] = packed[static_cast<std::size_t>(6 * r + d)];
-      hi[static_cast<std::size_t>(r)][d] = packed[static_cast<std::size_t>(6 * r + 3 + d)];
-    }
-  return Layouts{Decomposition::fromBoxes(comm, in.grid, std::move(lo), std::move(hi)),
-                 std::nullopt,
-                 "tiled",
-                 model,
-                 imb[0],
-                 imb[1]};
+Layouts runLayouts(const Comm& comm, const PartitionStrategy& strategy,
+                   const StrategyLayout& layout, const CostModel& model) {
+  const GlobalGrid& g = layout.fluid.grid;
+  Layouts L{layout.isGrid() ? Decomposition::fromCuts(comm, g, layout.fluidBlocks->cuts)
+                            : decompositionOf(comm, layout.fluid),
+            std::nullopt,
+            std::string(strategy.name()),
+            model,
+            layout.modelledImbalance,
+            layout.uniformImbalance};
+  if (layout.particleBlocks)
+    L.particles = Decomposition::fromCuts(comm, g, layout.particleBlocks->cuts);
+  return L;
 }
 
 ParticleProbe probeParticles(const Config& cfg, const Decomposition& dec) {

@@ -115,22 +115,25 @@ void boxHalo(const BoxLayout& L, int ghost, Int3 stagger, int fields, bool rever
   }
 }
 
-/// The tiled strategy: one box per rank for both physics.
-LayoutPlan planTiled(const PlanCase& pc, int ranks) {
+/// A layout of tiled boxes (no process grid): one box per rank for both physics.
+LayoutPlan planBoxes(const PlanCase& pc, const StrategyInput& in, const StrategyLayout& layout,
+                     LayoutPlan out) {
   const Config& cfg = *pc.cfg;
   const GlobalGrid& g = pc.grid;
-  LayoutPlan out;
-  out.strategy = "tiled";
-  out.ranks = ranks;
+  const int ranks = out.ranks;
   const bool fluidOn = pc.mode != RunMode::ParticlesOnly;
   const bool demOn = pc.mode != RunMode::FluidOnly;
   const bool coupled = pc.mode == RunMode::Coupled || pc.mode == RunMode::DummyDem;
-  BoxLayout L;
+  const BoxLayout& L = layout.fluid;
   dem::BinLayout bins;
   try {
-    const StrategyInput in = strategyInput(cfg, ranks);
-    const TiledLayout t = tiledStrategy(in, pc.cost, cfg.number("partition.cost.halo_cell"));
-    L = t.layout;
+    // The boxes under the case's cost, as the bisection measures them (a fluid-only run's boxes
+    // were placed on equal cells).
+    TiledLayout t;
+    t.layout = L;
+    TiledOptions opt;
+    opt.surfaceCost = cfg.number("partition.cost.halo_cell");
+    evaluateBoxes(pc.cost, opt, t);
     out.boxes = L.box;
     out.modelledImbalance = t.imbalance();
     if (t.avgCost > 0)
@@ -277,24 +280,22 @@ PlanCase planCase(const Config& cfg) {
   return pc;
 }
 
-LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks) {
-  if (strategy == "tiled") return planTiled(pc, ranks);
+namespace {
+
+/// A process-grid layout: the fluid's blocks, and the particles' (their own in independent
+/// partitions).
+LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPlan out) {
   const Config& cfg = *pc.cfg;
   const GlobalGrid& g = pc.grid;
-  LayoutPlan out;
-  out.strategy = strategy;
-  out.ranks = ranks;
+  const int ranks = out.ranks;
   const bool fluidOn = pc.mode != RunMode::ParticlesOnly;
   const bool demOn = pc.mode != RunMode::FluidOnly;
   const bool coupled = pc.mode == RunMode::Coupled || pc.mode == RunMode::DummyDem;
-  const bool independent = strategy == "independent" && demOn;
+  const bool independent = layout.particleBlocks.has_value();
   dem::BinLayout bins;
   try {
-    const StrategyInput in = strategyInput(cfg, ranks);
-    const std::string s = pc.mode == RunMode::FluidOnly ? "uniform" : strategy;
-    const StrategyBlocks b = chooseBlocks(s, in, pc.cost, pc.count);
-    out.fluid = b.fluid;
-    out.particles = b.particles ? *b.particles : b.fluid;
+    out.fluid = *layout.fluidBlocks;
+    out.particles = layout.particleBlocks ? *layout.particleBlocks : out.fluid;
     if (demOn)
       bins = dem::binLayout(cfg, g, out.particles.cuts, pc.particles.dmax, pc.particles.skin,
                             pc.particles.total);
@@ -475,6 +476,30 @@ LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks
   }
   out.imbalance = sum > 0 ? mx / (sum / ranks) : 1.0;
   return out;
+}
+
+}  // namespace
+
+LayoutPlan planLayout(const PlanCase& pc, const PartitionStrategy& strategy, int ranks) {
+  LayoutPlan out;
+  out.strategy = strategy.name();
+  out.ranks = ranks;
+  StrategyInput in;
+  StrategyLayout layout;
+  try {
+    in = strategyInput(*pc.cfg, ranks);
+    layout = strategy.layoutFor(
+        pc.mode, in, CellWork{pc.cost, pc.count, pc.cfg->number("partition.cost.halo_cell")});
+  } catch (const Error& e) {
+    out.error = e.what();
+    return out;
+  }
+  return layout.isGrid() ? planBlocks(pc, layout, std::move(out))
+                         : planBoxes(pc, in, layout, std::move(out));
+}
+
+LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks) {
+  return planLayout(pc, PartitionStrategy::named(strategy), ranks);
 }
 
 }  // namespace coloc::coupling

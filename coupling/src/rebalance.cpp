@@ -11,8 +11,9 @@
 namespace coloc::coupling {
 
 long long rebalanceInterval(const Config& cfg) {
-  const std::string s = cfg.string("partition.strategy");
-  return s == "balanced" || s == "tiled" ? cfg.integer("partition.rebalance_interval") : 0;
+  return PartitionStrategy::named(cfg.string("partition.strategy")).balancesCost()
+             ? cfg.integer("partition.rebalance_interval")
+             : 0;
 }
 
 bool rebalanceDue(const Config& cfg, long long steps) {
@@ -51,75 +52,26 @@ RebalancePlan planRebalance(Simulation& sim, const Config& cfg) {
   const auto cost = cellCostsOnRoot(dec, std::span<const double>(p.x[0].data(), m),
                                     std::span<const double>(p.x[1].data(), m),
                                     std::span<const double>(p.x[2].data(), m), plan.model);
-  if (dec.isTiled()) {  // the bisection anew on the same cost, the boxes moved when it pays
-    std::array<double, 2> verdict{1.0, 1.0};
-    Layouts L = tiledLayoutsOnRoot(comm, cfg, cost, plan.model, &dec, &verdict);
-    plan.currentImbalance = verdict[0];
-    plan.newImbalance = L.modelledImbalance;
-    plan.gain = verdict[1];
-    if (plan.gain >= cfg.number("partition.rebalance_threshold")) plan.layouts = std::move(L);
-    return plan;
-  }
-  const int gran = static_cast<int>(std::max<long long>(1, cfg.integer("particles.bin_cells")));
-  const auto fixed = cfg.intVec3("partition.dims");
-  const Int3 fixedDims{static_cast<int>(fixed[0]), static_cast<int>(fixed[1]),
-                       static_cast<int>(fixed[2])};
-  double verdict[3] = {1.0, 1.0, 1.0};  // current imbalance, new imbalance, gain
-  double evenImbalance = 1.0;
-  std::vector<int> packed;  // dims, then the cuts of the new blocks
-  std::string err;
-  if (comm.isRoot()) {
-    try {
-      BalancedLayout current;
-      current.dims = dec.dims();
-      current.cuts = dec.cuts();
-      evaluateLayout(g, cost, current);
-      const BalancedLayout best =
-          balanceBlocks(g, cost, comm.size(), /*minCells=*/2, gran, fixedDims);
-      verdict[0] = current.imbalance();
-      verdict[1] = best.imbalance();
-      verdict[2] = best.maxBlockCost > 0 ? current.maxBlockCost / best.maxBlockCost : 1.0;
-      BalancedLayout even;  // what uniform blocks would give now, for the report
-      StrategyInput in = strategyInput(cfg, comm.size());
-      const Blocks u = uniformBlocks(in);
-      even.dims = u.dims;
-      even.cuts = u.cuts;
-      evaluateLayout(g, cost, even);
-      evenImbalance = even.imbalance();
-      for (int d = 0; d < 3; ++d) packed.push_back(best.dims[d]);
-      for (int d = 0; d < 3; ++d)
-        packed.insert(packed.end(), best.cuts[d].begin(), best.cuts[d].end());
-    } catch (const Error& e) {
-      err = e.what();
-    }
-  }
-  err = comm.broadcast(err);
-  if (!err.empty()) throw Error(err);
-  comm.broadcast(std::span<double>(verdict, 3));
-  comm.broadcast(std::span<double>(&evenImbalance, 1));
-  plan.currentImbalance = verdict[0];
-  plan.newImbalance = verdict[1];
-  plan.gain = verdict[2];
-  if (plan.gain < cfg.number("partition.rebalance_threshold")) return plan;
-  int len = static_cast<int>(packed.size());
-  comm.broadcast(std::span<int>(&len, 1));
-  packed.resize(static_cast<std::size_t>(len));
-  comm.broadcast(std::span<int>(packed));
-  std::array<std::vector<int>, 3> cuts;
-  std::size_t q = 3;
-  for (int d = 0; d < 3; ++d) {
-    cuts[d].assign(
-        packed.begin() + static_cast<std::ptrdiff_t>(q),
-        packed.begin() + static_cast<std::ptrdiff_t>(q) + packed[static_cast<std::size_t>(d)] + 1);
-    q += static_cast<std::size_t>(packed[static_cast<std::size_t>(d)]) + 1;
-  }
-  Layouts L{Decomposition::fromCuts(comm, g, std::move(cuts)),
-            std::nullopt,
-            "balanced",
-            plan.model,
-            verdict[1],
-            evenImbalance};
-  plan.layouts = std::move(L);
+  // The strategy's own layout anew on that cost, and the blocks in use measured as it measures
+  // its own: the layout moves when its largest block cost drops by the threshold.
+  const PartitionStrategy& strategy = PartitionStrategy::named(cfg.string("partition.strategy"));
+  const StrategyInput in = strategyInput(cfg, comm.size());
+  const double haloCell = cfg.number("partition.cost.halo_cell");
+  double current[2] = {1.0, 0.0};  // the blocks in use: imbalance, largest block cost
+  const StrategyLayout next = layoutOnRoot(comm, g, [&] {
+    const std::vector<double> none;
+    const CellWork work{cost, none, haloCell};
+    const StrategyLayout now = strategy.evaluate(layoutOf(dec), in, work);
+    current[0] = now.modelledImbalance;
+    current[1] = now.maxCost;
+    return strategy.layout(in, work);
+  });
+  comm.broadcast(std::span<double>(current, 2));
+  plan.currentImbalance = current[0];
+  plan.newImbalance = next.modelledImbalance;
+  plan.gain = next.maxCost > 0 ? current[1] / next.maxCost : 1.0;
+  if (plan.gain >= cfg.number("partition.rebalance_threshold"))
+    plan.layouts = runLayouts(comm, strategy, next, plan.model);
   return plan;
 }
 

@@ -516,7 +516,7 @@ Json Simulation::report(double wallSeconds) const {
   out["partition"]["boxes"] = boxesJson(dec_);
   if (&particleDecomposition() != &dec_)
     out["partition"]["particle_boxes"] = boxesJson(particleDecomposition());
-  if (layouts_.strategy == "balanced" || layouts_.strategy == "tiled")
+  if (strategyOf(layouts_).balancesCost())
     out["partition"][layouts_.strategy] = {
         {"cost_per_cell", layouts_.model.perCell},
         {"cost_per_particle", layouts_.model.perParticle},

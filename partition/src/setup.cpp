@@ -1,6 +1,7 @@
 #include "coloc/partition/setup.hpp"
 
 #include "coloc/core/run_config.hpp"
+#include "coloc/partition/strategy.hpp"
 
 namespace coloc {
 
@@ -18,7 +19,7 @@ void declareDomainConfig(Schema& s) {
       "baseline, the DEM on its own blocks and every fluid-particle transfer by MPI; tiled: one "
       "box per rank by recursive bisection of the cost model (no process grid, any rank "
       "count)",
-      {"uniform", "balanced", "independent", "tiled"});
+      PartitionStrategy::names());
   s.number("partition.cost.cell", 1.0, "balanced, tiled: modelled cost of a cell per step",
            Range::nonNegative());
   s.number("partition.cost.particle", 2.0, "balanced, tiled: modelled cost of a particle per step",

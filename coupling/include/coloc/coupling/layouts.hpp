@@ -1,13 +1,14 @@
 // coloc/coupling/layouts.hpp — the blocks a run uses (Layouts), the case's constraints on them
 // and the cost probe: where the case's particles start, without a solver.
 //
-// The strategies themselves are in partition/strategy.hpp (chooseBlocks, for any rank count);
-// here they meet a live communicator (chooseBlocksOnRoot) and the case's particles
+// The strategies themselves are in partition/strategy.hpp (class PartitionStrategy, for any rank
+// count); here they meet a live communicator (layoutOnRoot, runLayouts) and the case's particles
 // (probeParticles: dem::caseParticles, the run's own generator, no DemSolver). The run's
 // Simulation::chooseLayouts and `coloc check` use the same probe.
 #pragma once
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,24 +31,21 @@ struct Layouts {
 };
 
 /// The case's constraints on the blocks of `ranks` ranks (partition.dims, partition.dem_dims,
-/// run.mode, particles.bin_cells): what chooseBlocks (partition/strategy.hpp) takes.
+/// run.mode, particles.bin_cells): what a PartitionStrategy (partition/strategy.hpp) takes.
 StrategyInput strategyInput(const Config& cfg, int ranks);
-/// chooseBlocks on rank 0, which alone holds `cost` (cellCostsOnRoot; the particles per cell
-/// when `costIsCount`, for the independent strategy), and the result on every rank. Collective;
-/// an error of the root is raised on every rank.
-StrategyBlocks chooseBlocksOnRoot(const Comm& comm, const std::string& strategy,
-                                  const StrategyInput& in, const std::vector<double>& cost,
-                                  bool costIsCount);
+/// The strategy of a run's layouts (PartitionStrategy::named(L.strategy)).
+const PartitionStrategy& strategyOf(const Layouts& L);
 
-/// The tiled strategy on rank 0, which alone holds `cost` (one value per global cell): the boxes
-/// of tiledStrategy (surface term partition.cost.halo_cell), sent to every rank (6 ints a rank),
-/// as a tiled Decomposition; modelledImbalance is that of the boxes, uniformImbalance that of
-/// the uniform blocks under the same cost. Collective; an error of the root is raised on every
-/// rank. With `current` (a re-balance), also `verdict` = {the current boxes' imbalance, the
-/// gain: their largest box cost / the new boxes'} under the same cost and surface term.
-Layouts tiledLayoutsOnRoot(const Comm& comm, const Config& cfg, const std::vector<double>& cost,
-                           const CostModel& model, const Decomposition* current = nullptr,
-                           std::array<double, 2>* verdict = nullptr);
+/// `choose` called on rank 0 alone, which alone holds the cells' work (cellCostsOnRoot), and the
+/// layout it returns on every rank (the cuts of a process grid, else 6 ints a box; the
+/// imbalances and costs). Collective; an error of the root is raised on every rank.
+StrategyLayout layoutOnRoot(const Comm& comm, const GlobalGrid& grid,
+                            const std::function<StrategyLayout()>& choose);
+
+/// A run's Layouts on `layout` (the same on every rank): Decompositions of `comm`'s ranks, a
+/// process grid's (Decomposition::fromCuts) or tiled boxes (fromBoxes). Collective.
+Layouts runLayouts(const Comm& comm, const PartitionStrategy& strategy,
+                   const StrategyLayout& layout, const CostModel& model);
 
 /// The case's initial particles as the run creates them, without a solver: the centres that lie
 /// in this rank's block of `dec` (each particle on exactly one rank), and over all of them

@@ -9,10 +9,10 @@
 // fields) mirrors fv::FluidSolver::step and Simulation::step; the exactness test (tests/coupling/
 // test_plan_exact.cpp) compares it with the ledger of real runs, kind by kind.
 //
-// The tiled strategy (partition/tiled.hpp) has no runtime yet: its plan counts what the general
-// box halo (partition/box_halo.hpp: one message per neighbour box, pieces of the ghost region)
-// and DEM ghosts sent to every box within the interaction range would send, with the same halo
-// schedule per step; it is not checked against a run.
+// A layout of tiled boxes (partition/tiled.hpp) is counted as the general box halo (partition/
+// box_halo.hpp: one message per neighbour box, pieces of the ghost region) and DEM ghosts sent to
+// every box within the interaction range send, with the same halo schedule per step
+// (tests/coupling/test_plan_tiled.cpp checks the halo part against BoxHaloPlan's ledger).
 //
 // Not modelled per step: DEM migration and ghost rebuilds (they follow the particles' motion;
 // a first step from rest has none), hypre's own messages inside the pressure solve, collectives.
@@ -70,9 +70,11 @@ struct PlanCase {
 };
 PlanCase planCase(const Config& cfg);
 
-/// The layout `strategy` would choose (uniform, balanced, independent, tiled) on `ranks` ranks and
-/// its per-rank work and traffic. Errors of the layout (no legal grid, bins that do not fit) land
-/// in LayoutPlan::error.
+/// The layout `strategy` would choose on `ranks` ranks (PartitionStrategy::layoutFor: a fluid-only
+/// case keeps the start layout, as a run does) and its per-rank work and traffic. Errors of the
+/// layout (no legal grid, bins that do not fit) land in LayoutPlan::error.
+LayoutPlan planLayout(const PlanCase& pc, const PartitionStrategy& strategy, int ranks);
+/// The same for the strategy called `strategy` (ConfigError when there is none).
 LayoutPlan planLayout(const PlanCase& pc, const std::string& strategy, int ranks);
 
 }  // namespace coloc::coupling

@@ -1,15 +1,15 @@
-// coloc/partition/strategy.hpp — the blocks each partition strategy chooses, as cuts, for any
-// rank count and without a communicator. A run builds its Decompositions from these
-// (coupling::Simulation::chooseLayouts), and `coloc plan` evaluates them for rank counts it does
-// not run: one code path for both.
+// coloc/partition/strategy.hpp — the partition strategies (class PartitionStrategy, one object
+// each): the blocks each chooses, for any rank count and without a communicator. A run builds its
+// Decompositions from these (coupling::chooseLayouts, re-balance), and `coloc check` and
+// `coloc plan` evaluate them for rank counts they do not run: one code path for all three.
 //
 //   uniform      chooseDims (MPI_Dims_create's grid where legal) and even cuts;
 //   balanced     balanceBlocks on the modelled cost of every cell (partition/balance.hpp);
 //   independent  the fluid on the uniform blocks, the DEM on blocks balanced by particle count,
 //                on a process grid other than the fluid's when one fits;
 //   tiled        one box per rank by recursive bisection of the modelled cost (partition/
-//                tiled.hpp): no process grid, so not Blocks (tiledStrategy; chooseBlocks
-//                refuses it). Runs build Decomposition::fromBoxes from it (coupling/layouts).
+//                tiled.hpp): no process grid, so boxes, not Blocks (tiledStrategy). Runs
+//                build Decomposition::fromBoxes from it (coupling/layouts).
 //
 // Ranks are numbered as MPI_Cart_create numbers them without reordering: row-major over the
 // block coordinates, z fastest.
@@ -18,8 +18,10 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "coloc/core/run_config.hpp"
 #include "coloc/partition/balance.hpp"
 #include "coloc/partition/decomposition.hpp"
 #include "coloc/partition/tiled.hpp"
@@ -55,22 +57,80 @@ struct StrategyInput {
   int granularity = 1;    // cuts on multiples of this many cells (particles.bin_cells)
 };
 
-struct StrategyBlocks {
-  std::string strategy;
-  Blocks fluid;                     // the co-located blocks (uniform, balanced) or the fluid's
-  std::optional<Blocks> particles;  // independent: the DEM's own blocks
-  double modelledImbalance = 1.0;   // balanced: max/avg modelled block cost
-  double uniformImbalance = 1.0;    // balanced: the same for the uniform blocks
-};
-
 /// The uniform strategy's blocks.
 Blocks uniformBlocks(const StrategyInput& in);
 
-/// The blocks of `strategy` ("uniform", "balanced", "independent"). `cost`: the modelled cost of
-/// every global cell (x fastest; balanced), `count`: particles per global cell (independent);
-/// either may be empty where the strategy does not read it. Throws ConfigError.
-StrategyBlocks chooseBlocks(const std::string& strategy, const StrategyInput& in,
-                            const std::vector<double>& cost, const std::vector<double>& count);
+/// The work of every global cell (x fastest) a strategy places its blocks on: the modelled cost
+/// (partition.cost.*: a cell and the particles in it), the particles it holds (the independent
+/// strategy balances its DEM blocks by count) and the modelled cost of a halo cell (the tiled
+/// surface term, partition.cost.halo_cell). A strategy reads only what it needs: `cost` may be
+/// empty for uniform and independent, `count` for all but independent.
+struct CellWork {
+  const std::vector<double>& cost;
+  const std::vector<double>& count;
+  double haloCell = 0.0;
+};
+
+/// The layout a strategy chooses for StrategyInput::ranks ranks, computed on one process.
+struct StrategyLayout {
+  /// Rank r's box of cells, of the fluid and of the particles (the same boxes but in independent
+  /// partitions, whose particles have blocks of their own).
+  BoxLayout fluid, particles;
+  /// A process-grid layout's blocks (unset for tiled boxes); particleBlocks only where the
+  /// particles have blocks of their own.
+  std::optional<Blocks> fluidBlocks, particleBlocks;
+  double modelledImbalance = 1.0;  // max / mean block cost under what it balanced (uniform: 1)
+  double uniformImbalance = 1.0;   // the uniform blocks' under the same cost (NaN: none fits)
+  double maxCost = 0.0, meanCost = 0.0;  // largest and mean block (box) cost, same cost
+  bool isGrid() const { return fluidBlocks.has_value(); }
+};
+
+/// The layout of a live decomposition (its blocks too, when it has a process grid); costs unset.
+StrategyLayout layoutOf(const Decomposition& dec);
+
+/// A partition strategy: how the blocks of the fluid and of the particles are chosen for N ranks.
+/// One object per strategy (PartitionStrategy::named); a run (coupling::chooseLayouts, re-balance,
+/// restart), `coloc check` and `coloc plan` all ask it, so they cannot disagree. Adding a
+/// strategy is one class in partition/src/strategy.cpp and one line in PartitionStrategy::all()
+/// (CONTRIBUTING.md).
+class PartitionStrategy {
+ public:
+  virtual ~PartitionStrategy() = default;
+  /// The partition.strategy value.
+  virtual std::string_view name() const = 0;
+  /// Whether its blocks sit on the modelled cost (partition.cost.*, measured first when
+  /// partition.calibrate_steps > 0): reports give the weights and imbalances, and re-balancing
+  /// (partition.rebalance_interval) moves them.
+  virtual bool balancesCost() const { return false; }
+  /// Whether the particles have blocks of their own, balanced by particle count (CellWork::count).
+  virtual bool ownParticleBlocks() const { return false; }
+  /// Whether its layouts are process grids (Decomposition::fromCuts; a checkpoint stores the
+  /// cuts) or tiled boxes (fromBoxes; a checkpoint stores the boxes).
+  virtual bool gridLayout() const { return true; }
+  /// Whether `coloc plan` evaluates it when no --strategy is named.
+  virtual bool plannedByDefault() const { return true; }
+
+  /// The layout before any cost is known: the uniform blocks (tiled: boxes of equal cell
+  /// counts). A fluid-only run keeps it; the cost probe and the calibration run on it.
+  virtual StrategyLayout startLayout(const StrategyInput& in, double haloCell) const;
+  /// The layout on `work`. Throws ConfigError where the case has no legal layout.
+  virtual StrategyLayout layout(const StrategyInput& in, const CellWork& work) const = 0;
+  /// `current` (layoutOf a live decomposition) measured as layout() measures its own blocks:
+  /// its modelledImbalance, uniformImbalance, maxCost and meanCost under `work` (the verdict of a
+  /// re-balance). Throws Error for a strategy that does not balance the cost.
+  virtual StrategyLayout evaluate(StrategyLayout current, const StrategyInput& in,
+                                  const CellWork& work) const;
+  /// The layout of a run in `mode`: startLayout for a fluid-only run, else layout().
+  StrategyLayout layoutFor(RunMode mode, const StrategyInput& in, const CellWork& work) const;
+
+  /// The strategy called `name`; ConfigError naming `key` and listing the strategies otherwise.
+  static const PartitionStrategy& named(std::string_view name,
+                                        const std::string& key = "partition.strategy");
+  /// Every strategy, in the order reports and `coloc check` list them.
+  static std::span<const PartitionStrategy* const> all();
+  /// Their names, in that order.
+  static std::vector<std::string> names();
+};
 
 /// The tiled strategy's boxes on `cost` (one value per global cell): the balanced strategy's
 /// thinnest block (max(2, minCells)) and granularity; `surfaceCost` per halo cell of a box
