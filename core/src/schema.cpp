@@ -1,8 +1,6 @@
 // core/src/schema.cpp — the case file's schema (Schema, Range): key kinds, defaults, ranges,
 // choices, typed variants and lists; resolve() checks a user document against it and fills the
 // defaults, describe() writes the reference (coloc --help-keys). Config (config.cpp) reads with it.
-#include "coloc/core/config.hpp"
-
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -17,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "coloc/core/config.hpp"
 #include "coloc/core/files.hpp"
 #include "key_path.hpp"
 

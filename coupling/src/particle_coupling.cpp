@@ -63,7 +63,7 @@ void ParticleCoupling::locate(const ParticleView& view, const FieldLayout& layou
 void ParticleCoupling::evaluateDrag(const DragFields* fields, double dt, double time) {
   const std::size_t n = stencils_.count();
   const bool self = selfVelocity_ != SelfVelocity::None;
-  std::string err;
+  failure_.clear();
   // Range by range (kSampleChunk particles): the fields sampled at them, then the drag, which
   // reads the sampled values while they are still in cache. Each phase is timed as its own.
   for (std::size_t s0 = 0; s0 < n; s0 += kSampleChunk) {
@@ -79,13 +79,13 @@ void ParticleCoupling::evaluateDrag(const DragFields* fields, double dt, double 
       }
       interpolate(stencils_, *fields, out, s0, sn);
     }
-    evaluateDragOn(s0, sn, dt, time, err);
+    evaluateDragOn(s0, sn, dt, time);
   }
-  if (self) dec_->comm().raiseIfAny(err);
+  if (self) dec_->comm().raiseIfAny(failure_);
 }
 
-void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, double dt, double time,
-                                      std::string& err) {
+void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, double dt,
+                                      double time) {
   const ParticleView& p = view_;
   const bool self = selfVelocity_ != SelfVelocity::None;
   const double vCell = dec_->grid().cellVolume();
@@ -120,7 +120,7 @@ void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, doub
     // Each particle's implicit response.
     if (self || still) {
       for (std::size_t j = 0; j < m; ++j)
-        respondToDrag(i0 + j, cEps[j], cSlip[j], cBeta[j], dt, time, still, self, err);
+        respondToDrag(i0 + j, cEps[j], cSlip[j], cBeta[j], dt, time, still, self);
       continue;
     }
     // The common case, respondToDrag's arithmetic without the correction, array by array (the
@@ -141,7 +141,7 @@ void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, doub
 }
 
 void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, double beta, double dt,
-                                     double time, bool still, bool self, std::string& err) {
+                                     double time, bool still, bool self) {
   const ParticleView& p = view_;
   const double epsFluid = std::clamp(epsAt_[i], epsMin_, 1.0);
   // 1 + dt beta / m - c beta: the implicit particle response and the self-induced velocity
@@ -150,7 +150,7 @@ void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, dou
   std::array<double, 3> ownPressure{};
   if (self)
     denom = correctForSelfVelocity(i, epsFluid, eps, slip, still ? 0.0 : dt,
-                                   time + std::max(dt, 0.0), beta, ownPressure, err);
+                                   time + std::max(dt, 0.0), beta, ownPressure);
   beta_[i] = beta / denom;
   if (still) {
     // Particles that cannot move: the plain coefficient and their (zero) velocity.
@@ -182,8 +182,7 @@ void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, dou
 double ParticleCoupling::correctForSelfVelocity(std::size_t i, double epsFluid,
                                                 double epsUndisturbed, double slipSampled,
                                                 double dt, double tRun, double& beta,
-                                                std::array<double, 3>& pressure,
-                                                std::string& err) const {
+                                                std::array<double, 3>& pressure) {
   // The drag law sees the undisturbed slip |u_at + c F - v| = slip / (1 - c beta'), beta' the
   // coefficient with the particle's implicit response; c depends on the coefficient the fluid
   // takes implicitly, beta_eff = beta / denom. A few fixed-point passes (c changes by a few
@@ -201,13 +200,13 @@ double ParticleCoupling::correctForSelfVelocity(std::size_t i, double epsFluid,
     const double c = r.mobility;
     const double cb = c * beta / (1.0 + inertia * beta);  // c beta'
     if (!(cb < 0.5)) {
-      if (err.empty()) {
+      if (failure_.empty()) {
         std::ostringstream os;
         os << "coupling.self_velocity: particle " << p.id[i] << " (d/h = " << d / h
            << ") is too large for the correction (its self-induced velocity would be " << cb
            << " of its slip; the model holds below 0.5): use larger cells or "
            << "coupling.self_velocity = none";
-        err = os.str();
+        failure_ = os.str();
       }
       return denom;
     }

@@ -82,20 +82,19 @@ class ParticleCoupling {
   }
   void resize(std::size_t n);
   /// The drag on particles first .. first + count - 1.
-  void evaluateDragOn(std::size_t first, std::size_t count, double dt, double time,
-                      std::string& err);
+  void evaluateDragOn(std::size_t first, std::size_t count, double dt, double time);
   /// Particle i's implicit response to its drag coefficient beta (the law's value at eps, slip);
   /// `still`: it cannot move (frozen particles, or dt <= 0); `self`: with the correction.
   void respondToDrag(std::size_t i, double eps, double slip, double beta, double dt, double time,
-                     bool still, bool self, std::string& err);
+                     bool still, bool self);
   /// coupling.self_velocity: beta re-evaluated at the undisturbed slip and fluid fraction
   /// epsUndisturbed; returns 1 + dt beta / m - c beta (self_velocity.hpp; dt = 0 for particles
   /// that cannot move), c at tRun after the run's start in fluid of fraction epsFluid; pressure:
   /// the particle's own pressure-gradient response (SelfResponse). A particle too large for the
-  /// model sets err.
+  /// model is noted in failure_.
   double correctForSelfVelocity(std::size_t i, double epsFluid, double epsUndisturbed,
                                 double slipSampled, double dt, double tRun, double& beta,
-                                std::array<double, 3>& pressure, std::string& err) const;
+                                std::array<double, 3>& pressure);
 
   const Decomposition* dec_ = nullptr;
   Timers* timers_ = nullptr;
@@ -104,6 +103,9 @@ class ParticleCoupling {
   SelfVelocity selfVelocity_ = SelfVelocity::None;
   bool frozen_ = false;
   double epsMin_ = 0.3, rhoF_ = 1.0, nu_ = 1e-6;
+  // The first particle the drag evaluation of this step could not treat (empty: none), raised
+  // on every rank at the end of evaluateDrag.
+  std::string failure_;
 
   // The particles of the view (grow-only buffers): 15 doubles and a compact stencil a particle.
   ParticleView view_;
