@@ -45,6 +45,15 @@ struct Bins {
     }
     return true;
   }
+  /// The rank whose block owns x by this rule (x wrapped into the box on periodic axes).
+  int ownerRank(const Decomposition& dec, const double* x) const {
+    Int3 cell{};
+    for (int d = 0; d < 3; ++d) {
+      const long long b = gbinClamped(x[d], d);
+      cell[d] = static_cast<int>(binSplit[d] > 1 ? b / binSplit[d] : b * binMult[d]);
+    }
+    return dec.ownerOfCell(cell);
+  }
   /// Local bin (with the ghost layer) of a position: an owned particle clamped into the block, a
   /// ghost into the ghost layer.
   int localBin(double x, double y, double z, bool owned) const {

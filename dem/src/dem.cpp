@@ -69,7 +69,7 @@ void DemSolver::Impl::substep() {
     rebuild(false);
   } else {
     ScopedPhase t(timers, Phase::DemGhost);
-    updateGhosts();
+    exchange->updateGhosts();
   }
   {
     ScopedPhase t(timers, Phase::DemForce);
@@ -204,7 +204,7 @@ void DemSolver::Impl::rebuild(bool first) {
       for (const auto& q : incoming) addParticle(q);
       incoming.clear();
     }
-    migrate();
+    exchange->migrate();
   }
   {
     ScopedPhase t(timers, Phase::DemNeighbour);
@@ -212,7 +212,7 @@ void DemSolver::Impl::rebuild(bool first) {
   }
   {
     ScopedPhase t(timers, Phase::DemGhost);
-    buildGhosts();
+    exchange->buildGhosts();
   }
   {
     ScopedPhase t(timers, Phase::DemNeighbour);

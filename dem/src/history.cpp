@@ -43,9 +43,14 @@ void HistoryPool::compact(std::vector<int>& slot) {
   std::vector<int>().swap(freeSlots);
 }
 
-void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
+void detail::keepRow(ParticleStore& p, HistoryPool& hist, std::size_t i, std::size_t w, int h0,
+                     int h1, int& hw) {
   if (w != i) copyRow(p, i, w);
   hist.keepRows(w, h0, h1, hw);
+}
+
+void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
+  detail::keepRow(p, hist, i, w, h0, h1, hw);
 }
 
 void DemSolver::Impl::packHistory() {

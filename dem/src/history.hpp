@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "buffers.hpp"
+#include "coloc/dem/dem.hpp"
 
 namespace coloc::dem::detail {
 
@@ -57,5 +58,10 @@ struct HistoryPool {
   void compact(std::vector<int>& slot);
   std::size_t bytes() const { return cap(hStart) + cap(hKey) + cap(hS) + cap(freeSlots); }
 };
+
+/// Owned row i of `p` kept as row w (w <= i) while rows before it leave (migration, outflow), its
+/// packed contact histories [h0, h1) moved down to hw on.
+void keepRow(ParticleStore& p, HistoryPool& hist, std::size_t i, std::size_t w, int h0, int h1,
+             int& hw);
 
 }  // namespace coloc::dem::detail

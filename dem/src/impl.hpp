@@ -1,13 +1,16 @@
 // dem/src/impl.hpp — DemSolver::Impl: the solver composed of its parts. Each part is a small
-// struct holding its data (bins.hpp, neighbours.hpp, history.hpp, ghosts.hpp; the particle
-// arrays and their field table in coloc/dem/dem.hpp); the methods are defined in the file of
-// their concept:
+// struct holding its data (bins.hpp, neighbours.hpp, history.hpp; the particle arrays and their
+// field table in coloc/dem/dem.hpp); the methods are defined in the file of their concept. The
+// particle exchange is a part that owns its state and works on what Impl lends it
+// (exchange.hpp), made once at setup.
 //   dem.cpp        the sub-step (velocity Verlet), the rebuild sequence, the public interface
-//   setup.cpp      materials, bins, time-step check, initial particles
+//   setup.cpp      materials, bins, time-step check, initial particles, the exchange
 //   flow.cpp       face conditions, outflow removal, inflow insertion, DemFlow
 //   history.cpp    contact-history pool: packing into rows per particle, compaction
-//   ghosts.cpp     face exchanges: migration, ghost build and update (rows of the field table)
-//   ghosts_tiled.cpp  the same on a tiled layout (general boxes), one exchange each
+//   exchange.cpp   the particle exchange: migration, ghost build and update (rows of the field
+//                  table), and the migrant rows both layouts share; one implementation per
+//                  layout: exchange_grid.cpp (process grid, three sweeps), exchange_tiled.cpp
+//                  (general boxes, one exchange each)
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
 //   neighbours.cpp  the half Verlet list build (and the history lookup of its entries)
 //   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
@@ -17,6 +20,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -24,8 +28,8 @@
 #include "buffers.hpp"
 #include "coloc/dem/dem.hpp"
 #include "contact.hpp"
+#include "exchange.hpp"
 #include "generate.hpp"
-#include "ghosts.hpp"
 #include "history.hpp"
 #include "neighbours.hpp"
 #include "pairs.hpp"
@@ -100,7 +104,9 @@ struct DemSolver::Impl {
   detail::Bins bins;
   detail::NeighbourList list;
   detail::HistoryPool hist;
-  detail::GhostPlan ghosts;
+  /// Migration, ghost build and update (exchange.hpp): the process grid's or the tiled one,
+  /// made at setup (setupBins) from the decomposition.
+  std::unique_ptr<detail::ParticleExchange> exchange;
   std::vector<int> inScr;  // scratch (grow-only)
   // the (bin, id) re-sort's permutation, from sortByBin to the end of buildLists (perm[k]: the
   // history row of particle k), in the rebuild's scratch (rebuildInts)
@@ -151,7 +157,7 @@ struct DemSolver::Impl {
     f("hist.key_x0", detail::cap(hist.hKey));
     f("hist.shear", detail::cap(hist.hS));
     f("hist.free", detail::cap(hist.freeSlots));
-    f("ghosts", ghosts.bytes());
+    f("ghosts", exchange ? exchange->bytes() : 0);
     f("scratch", detail::cap(inScr));
     f("body", detail::cap(body));
   }
@@ -175,35 +181,6 @@ struct DemSolver::Impl {
   /// Owned row i kept as row w (w <= i) while rows before it leave (migration, outflow), its
   /// packed contact histories [h0, h1) moved down to hw on.
   void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
-  // ghosts.cpp
-  /// The neighbours along axis d (MPI_PROC_NULL left out; this rank when the axis is periodic
-  /// over one block); returns how many (0 to 2).
-  int neighbours(int d, int* out) const;
-  /// Where the imports of `plan` from the two neighbours along d go: the segments of rows
-  /// from the high neighbour, then the low one (the order of the face exchanges).
-  int importSegments(const CommPlan& plan, int d, std::array<detail::GhostPlan::Segment, 2>& seg,
-                     int at) const;
-  void migrate();
-  void buildGhosts();
-  void updateGhosts();
-  PlanTraffic forwardGhostRows(int d, unsigned op, std::size_t W);
-  /// Migration along axis d of owned particle i: wraps its position across a periodic face,
-  /// returns -1 / +1 when it leaves the block through the low / high face along d, else 0;
-  /// kLost (and the first such message in err) for a non-finite particle or one beyond a wall.
-  static constexpr int kLost = 2;
-  int crossAxis(std::size_t i, int d, std::string& err);
-  /// A migrant's row: the field table's kOpMigrate row (W doubles), its history count, then
-  /// (partner id, shear 3) per history.
-  std::size_t migrantLength(std::size_t i, std::size_t W) const;
-  void packMigrant(std::size_t i, std::size_t W, double* out) const;
-  /// Migrant rows laid end to end (len doubles) appended as owned particles.
-  void unpackMigrants(const double* b, std::size_t len, std::size_t W);
-  // ghosts_tiled.cpp: the same operations on a tiled layout (chosen once, at setup)
-  void setupTargets(const BinLayout& b);
-  void migrateTiled();
-  void buildGhostsTiled();
-  void updateGhostsTiled();
-  PlanTraffic forwardTargetRows(unsigned op, std::size_t W);
   // bins.cpp, neighbours.cpp
   void sortByBin();
   void buildLists();

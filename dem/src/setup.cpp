@@ -205,7 +205,16 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
                           ? binLayout(cfg, grid, boxLayoutOf(dec).cutPlanes(), dmax, skin, total)
                           : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
   bins.setup(grid, b, dec.lo(), dec.hi());
-  if (dec.isTiled()) setupTargets(b);  // the tiled exchanges (ghosts_tiled.cpp)
+  // the particle exchange of the layout (exchange.hpp), lent the solver's state
+  exchange = detail::makeExchange({.dec = dec,
+                                   .comm = comm,
+                                   .timers = timers,
+                                   .p = p,
+                                   .hist = hist,
+                                   .bins = bins,
+                                   .rc = rc,
+                                   .where = [this] { return where(); }},
+                                  b);
 }
 
 CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid, bool rows) {

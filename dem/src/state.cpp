@@ -18,12 +18,7 @@ using namespace detail;
 // state: checkpoint/restart and re-balancing
 
 int DemSolver::Impl::ownerRank(const double* x) const {
-  Int3 cell{};
-  for (int d = 0; d < 3; ++d) {
-    const long long b = bins.gbinClamped(x[d], d);
-    cell[d] = static_cast<int>(bins.binSplit[d] > 1 ? b / bins.binSplit[d] : b * bins.binMult[d]);
-  }
-  return dec.ownerOfCell(cell);
+  return bins.ownerRank(dec, x);
 }
 
 namespace {
@@ -294,6 +289,7 @@ void DemSolver::Impl::restore(DemState& st) {
   rebuild(true);
   hist.compact(list.slot);  // the rows held every history twice (under both particles of a pair)
   trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
+  const std::function<std::string()> at = [this] { return where(); };
   for (std::size_t i = 0; i < p.nOwned && err.empty() && withX0; ++i) {
     const auto it = std::lower_bound(xNow.begin(), xNow.end(), p.id[i],
                                      [](const auto& e, std::int64_t id) { return e.first < id; });
@@ -306,12 +302,12 @@ void DemSolver::Impl::restore(DemState& st) {
     // where it is now must be a place a step could have left it: inside the walls (a periodic
     // axis wraps at the next rebuild)
     for (int d = 0; d < 3 && err.empty(); ++d)
-      if (!bins.periodic[d]) (void)crossAxis(i, d, err);
+      if (!bins.periodic[d]) (void)detail::crossAxis(p, bins, i, d, err, at);
   }
   comm.raiseIfAny(err);
   if (withX0) {  // the ghosts to where their owners are now
     ScopedPhase g(timers, Phase::DemGhost);
-    updateGhosts();
+    exchange->updateGhosts();
   }
   {
     ScopedPhase f(timers, Phase::DemForce);
