@@ -13,73 +13,105 @@
 
 namespace coloc::coupling {
 
+/// Where a new Simulation's state comes from: the case (nothing to read), a checkpoint (the
+/// file, opened once it is checked), or a running Simulation on other blocks (re-balance).
+struct Simulation::Origin {
+  const std::string* checkpoint = nullptr;
+  Simulation* running = nullptr;
+  std::optional<H5File> file;
+  /// Whether the state continues a run (restart or re-balance) rather than the case's start.
+  bool continues() const { return checkpoint || running; }
+};
+
 Simulation::Simulation(const Comm& world, const Config& cfg)
     : Simulation(cfg, chooseLayouts(world, cfg)) {}
 
 Simulation::Simulation(const Config& cfg, Layouts layouts)
-    : Simulation(cfg, std::move(layouts), nullptr, nullptr) {}
+    : Simulation(cfg, std::move(layouts), Origin{}) {}
 
 Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string& checkpoint)
-    : Simulation(cfg, std::move(layouts), &checkpoint, nullptr) {}
+    : Simulation(cfg, std::move(layouts), Origin{&checkpoint, nullptr, std::nullopt}) {}
 
 Simulation::Simulation(const Config& cfg, Layouts layouts, Simulation& from)
-    : Simulation(cfg, std::move(layouts), nullptr, &from) {}
+    : Simulation(cfg, std::move(layouts), Origin{nullptr, &from, std::nullopt}) {}
 
-Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint,
-                       Simulation* from)
+Simulation::Simulation(const Config& cfg, Layouts layouts, Origin origin)
     : cfg_(cfg),
       layouts_(std::move(layouts)),
       dec_(layouts_.fluid),
       demDec_(layouts_.particles),
       mode_(runMode(cfg)) {
   ScopedPhase setup(timers_, Phase::Setup);
-  maxSteps_ = cfg.integer("run.steps");
-  steadyTol_ = cfg.number("fluid.steady_tol");
-  endTime_ = cfg.number("run.end_time");
-  demSubsteps_ = cfg.integer("coupling.dem_substeps");
-  timers_.setSyncPoints(cfg.boolean("run.timer_sync"));
-  if (maxSteps_ == 0 && endTime_ <= 0)
-    throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
-  // Restart: the checkpoint is checked (status, grid, mode) and read on these blocks.
-  std::optional<H5File> file;
-  if (checkpoint) {
-    checkRestartable(dec_.comm(), *checkpoint, dec_.grid(), mode_);
-    file.emplace(H5File::openRead(dec_.comm(), *checkpoint));
-    fault::point("restart", 0);
-  }
-  if (mode_ != RunMode::ParticlesOnly) {
-    fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg, timers_);
-    if (file) readFluidState(*file, "/fluid", dec_, *fluid_);
-    if (from) remapFluid(*from);
-  }
+  readRunLimits();
+  openCheckpoint(origin);
+  createFluid(origin);
   fault::point("setup", 0);
-  if (mode_ != RunMode::FluidOnly) {
-    if (file) {
-      dem::DemState state = readDemState(*file, "/particles");
-      validateDemState(dec_.comm(), state, dec_.grid(), cfg.at("particles.materials").size(),
-                       *checkpoint);
-      dem_ =
-          std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_, std::move(state));
-    } else if (from) {
-      // The DEM's own restoring constructor sends every row to the owner of its position.
-      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_,
-                                              from->dem_->saveState());
-    } else {
-      dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg, timers_);
-    }
-    if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
-    transfer_ = demDec_ ? proxyTransfer(dec_, *dem_) : colocatedTransfer(*dem_);
-  }
-  if (file) {
-    run_ = readRunCounters(*file, "/simulation");
-    file->close();
-  }
-  if (from) run_ = from->run_;
+  createParticles(origin);
+  takeRunCounters(origin);
   coupled_ = mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem;
   if (!coupled_) return;
+  createCoupling();
+  if (origin.continues())
+    resumeCoupling();
+  else
+    initialiseCoupling();
+}
 
-  coupling_ = std::make_unique<ParticleCoupling>(cfg, dec_, timers_, mode_ == RunMode::DummyDem);
-  smoothingPasses_ = static_cast<int>(cfg.integer("coupling.smoothing_passes"));
+void Simulation::readRunLimits() {
+  maxSteps_ = cfg_.integer("run.steps");
+  steadyTol_ = cfg_.number("fluid.steady_tol");
+  endTime_ = cfg_.number("run.end_time");
+  demSubsteps_ = cfg_.integer("coupling.dem_substeps");
+  timers_.setSyncPoints(cfg_.boolean("run.timer_sync"));
+  if (maxSteps_ == 0 && endTime_ <= 0)
+    throw ConfigError("run.steps", "give run.steps > 0 or run.end_time > 0");
+}
+
+void Simulation::openCheckpoint(Origin& origin) {
+  if (!origin.checkpoint) return;
+  // Restart: the checkpoint is checked (status, grid, mode) and read on these blocks.
+  checkRestartable(dec_.comm(), *origin.checkpoint, dec_.grid(), mode_);
+  origin.file.emplace(H5File::openRead(dec_.comm(), *origin.checkpoint));
+  fault::point("restart", 0);
+}
+
+void Simulation::createFluid(Origin& origin) {
+  if (mode_ == RunMode::ParticlesOnly) return;
+  fluid_ = std::make_unique<fv::FluidSolver>(dec_, cfg_, timers_);
+  if (origin.file) readFluidState(*origin.file, "/fluid", dec_, *fluid_);
+  if (origin.running) remapFluid(*origin.running);
+}
+
+void Simulation::createParticles(Origin& origin) {
+  if (mode_ == RunMode::FluidOnly) return;
+  if (origin.file) {
+    dem::DemState state = readDemState(*origin.file, "/particles");
+    validateDemState(dec_.comm(), state, dec_.grid(), cfg_.at("particles.materials").size(),
+                     *origin.checkpoint);
+    dem_ =
+        std::make_unique<dem::DemSolver>(particleDecomposition(), cfg_, timers_, std::move(state));
+  } else if (origin.running) {
+    // The DEM's own restoring constructor sends every row to the owner of its position.
+    dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg_, timers_,
+                                            origin.running->dem_->saveState());
+  } else {
+    dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg_, timers_);
+  }
+  if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
+  transfer_ = demDec_ ? proxyTransfer(dec_, *dem_) : colocatedTransfer(*dem_);
+}
+
+void Simulation::takeRunCounters(Origin& origin) {
+  if (origin.file) {
+    run_ = coupling::readRunCounters(*origin.file, "/simulation");
+    origin.file->close();
+  }
+  if (origin.running) run_ = origin.running->run_;
+}
+
+void Simulation::createCoupling() {
+  coupling_ = std::make_unique<ParticleCoupling>(cfg_, dec_, timers_, mode_ == RunMode::DummyDem);
+  smoothingPasses_ = static_cast<int>(cfg_.integer("coupling.smoothing_passes"));
   const FieldLayout layout = fluid_->fields().p.layout();
   solid_ = CellField(layout);
   scratch_ = CellField(layout);
@@ -96,16 +128,18 @@ Simulation::Simulation(const Config& cfg, Layouts layouts, const std::string* ch
   FieldLayout oneLayer = layout;
   oneLayer.ghost = 1;
   halo_ = HaloPlan(dec_, oneLayer, layout);
+}
 
-  if (checkpoint || from) {
-    // What the last step left in the coupling's own fields: the cell-centred velocity and the
-    // pressure gradient of u^{n+1}, p^{n+1} (eps and its ghosts: restored by the fluid).
-    fluid_->cellVelocity(uCell_);
-    for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
-    fluid_->pressureGradient(gradP_);
-    for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
-    return;
-  }
+void Simulation::resumeCoupling() {
+  // What the last step left in the coupling's own fields: the cell-centred velocity and the
+  // pressure gradient of u^{n+1}, p^{n+1} (eps and its ghosts: restored by the fluid).
+  fluid_->cellVelocity(uCell_);
+  for (auto& u : uCell_) fillWallGhostsByMirror(dec_, u);
+  fluid_->pressureGradient(gradP_);
+  for (auto& g : gradP_) fillWallGhostsByMirror(dec_, g);
+}
+
+void Simulation::initialiseCoupling() {
   // The initial porosity: deposit the particle volume once and start with eps^0 = eps^1 so the
   // first step sees no spurious d(eps)/dt.
   gatherParticles();

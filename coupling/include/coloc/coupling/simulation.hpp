@@ -162,7 +162,19 @@ class Simulation {
   Json report(double wallSeconds) const;
 
  private:
-  Simulation(const Config& cfg, Layouts layouts, const std::string* checkpoint, Simulation* from);
+  // Construction, one phase each (simulation.cpp): where the state comes from (Origin), the run's
+  // limits, the fluid, the particles, the counters, then the coupling, started from the case or
+  // resumed from the state.
+  struct Origin;
+  Simulation(const Config& cfg, Layouts layouts, Origin origin);
+  void readRunLimits();
+  void openCheckpoint(Origin& origin);
+  void createFluid(Origin& origin);
+  void createParticles(Origin& origin);
+  void takeRunCounters(Origin& origin);
+  void createCoupling();
+  void resumeCoupling();
+  void initialiseCoupling();
   void remapFluid(const Simulation& from);
   void waitForSlowestRank();
   void gatherParticles();
