@@ -32,7 +32,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <new>
 #include <span>
 
 #include "impl.hpp"
@@ -161,20 +160,8 @@ void DemSolver::Impl::checkOverlap(double globalMax) {
 }
 
 bool DemSolver::Impl::decideRebuild() {
-  double m2 = 0;
+  double m2 = search.maxDisplacement2(p);
   const std::size_t n = p.nOwned;
-  // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
-  // double first, so a lost particle forces the rebuild)
-  const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
-  const double *X0 = hist.x0(0, n), *Y0 = hist.x0(1, n), *Z0 = hist.x0(2, n);
-  constexpr double kBig = std::numeric_limits<double>::max();
-#pragma omp simd reduction(max : m2)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double dx = X[i] - X0[i], dy = Y[i] - Y0[i], dz = Z[i] - Z0[i];
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    const double c = d2 <= kBig ? d2 : kBig;
-    m2 = m2 > c ? m2 : c;
-  }
   // a centre beyond an outflow face, or particles entering, rebuild now (removal, insertion)
   if (forceRebuild) m2 = std::numeric_limits<double>::max();
   forceRebuild = false;
@@ -197,7 +184,7 @@ void DemSolver::Impl::rebuild(bool first) {
   packed = false;  // the particles change order (and count): the next force loop packs them
   {
     ScopedPhase t(timers, Phase::DemMigrate);
-    if (!first) packHistory();
+    if (!first) search.packHistory(p, dec, comm.size());
     if (anyOutflow) removeOutflow();
     if (!incoming.empty()) {
       p.nGhost = 0;
@@ -208,7 +195,7 @@ void DemSolver::Impl::rebuild(bool first) {
   }
   {
     ScopedPhase t(timers, Phase::DemNeighbour);
-    sortByBin();
+    search.sortByBin(p);
   }
   {
     ScopedPhase t(timers, Phase::DemGhost);
@@ -216,28 +203,10 @@ void DemSolver::Impl::rebuild(bool first) {
   }
   {
     ScopedPhase t(timers, Phase::DemNeighbour);
-    buildLists();
-    keepPositions();
+    search.buildLists(p, skin, wallOn);
+    search.keepPositions(p);
   }
   if (!first) ++rebuilds;
-}
-
-int* DemSolver::Impl::rebuildInts(std::size_t count) {
-  const std::size_t lines = (count * sizeof(int) + sizeof(Body) - 1) / sizeof(Body) + 1;
-  ensure(body, lines);
-  if (body.size() < lines) body.resize(lines);
-  // the ints take over the storage (the bodies are dead until the next force computation, which
-  // constructs them anew)
-  return std::launder(::new (static_cast<void*>(body.data())) int[count]);
-}
-
-void DemSolver::Impl::keepPositions() {
-  // x0 in the keys' array (history.hpp), which the list build has read for the last time
-  const std::size_t n = p.nOwned;
-  ensure(hist.hKey, 3 * n);
-  hist.hKey.resize(3 * n);
-  for (int d = 0; d < 3; ++d)
-    std::copy_n(p.x[d].begin(), n, hist.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
 }
 
 std::size_t DemSolver::Impl::memory() const {
@@ -305,7 +274,7 @@ double DemSolver::skin() const {
   return impl_->skin;
 }
 std::array<double, 3> DemSolver::binSize() const {
-  return impl_->bins.bs;
+  return impl_->search.bins.bs;
 }
 long long DemSolver::rebuildCount() const {
   return impl_->rebuilds;
@@ -322,9 +291,12 @@ long long DemSolver::localWallContacts() const {
 
 Json DemSolver::diagnostics() const {
   const auto& m = *impl_;
-  double loc[6] = {static_cast<double>(m.p.nOwned),        static_cast<double>(m.tally.contacts),
-                   static_cast<double>(m.tally.walls),     static_cast<double>(m.p.nGhost),
-                   static_cast<double>(m.list.nbr.size()), static_cast<double>(m.memory())};
+  double loc[6] = {static_cast<double>(m.p.nOwned),
+                   static_cast<double>(m.tally.contacts),
+                   static_cast<double>(m.tally.walls),
+                   static_cast<double>(m.p.nGhost),
+                   static_cast<double>(m.search.list.nbr.size()),
+                   static_cast<double>(m.memory())};
   m.comm.sumInPlace(std::span<double>(loc, 6));
   const double n = std::max(1.0, loc[0]);
   Json j;
@@ -347,7 +319,7 @@ Json DemSolver::diagnostics() const {
   }
   j["interaction_range"] = m.rc;
   j["skin"] = m.skin;
-  j["bin_size"] = {m.bins.bs[0], m.bins.bs[1], m.bins.bs[2]};
+  j["bin_size"] = {m.search.bins.bs[0], m.search.bins.bs[1], m.search.bins.bs[2]};
   j["dt"] = m.dt;
   j["frozen"] = m.frozen;
   // flow: mass in (initial + inflow) = mass out (outflow faces) + mass held

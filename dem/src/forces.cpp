@@ -71,12 +71,12 @@ void DemSolver::Impl::forces(bool update, bool stepped) {
   packed = true;
   const Body* B = body.data();
   const int* mat = p.material.data();
-  const int* nbrs = list.nbr.data();
-  int* sl = list.slot.data();
+  const int* nbrs = search.list.nbr.data();
+  int* sl = search.list.slot.data();
   const bool single = nMat == 1;
   PairInputs in{B,
                 {p.omega[0].data(), p.omega[1].data(), p.omega[2].data()},
-                hist.hS.data(),
+                search.hist.hS.data(),
                 pairC.data(),
                 dt};
   PairChunk& ch = chunk;
@@ -93,11 +93,12 @@ void DemSolver::Impl::forces(bool update, bool stepped) {
       const auto i = static_cast<std::size_t>(ch.i[k]);
       const Body& bi = B[i];
       const double ri = bi.r;
-      double* sh = &hist.hS[3 * static_cast<std::size_t>(ch.slot[k])];
+      double* sh = &search.hist.hS[3 * static_cast<std::size_t>(ch.slot[k])];
       if (ch.wall[k] >= 0) {
         const int w = ch.wall[k], d = w / 2, s = w % 2;
         const double xi = bi.x[d];
-        const double dist = s == 0 ? xi - bins.origin[d] : bins.origin[d] + bins.L[d] - xi;
+        const double dist =
+            s == 0 ? xi - search.bins.origin[d] : search.bins.origin[d] + search.bins.L[d] - xi;
         const double delta = ri - dist;
         double nrm[3] = {0, 0, 0};
         nrm[d] = s == 0 ? 1.0 : -1.0;
@@ -145,11 +146,11 @@ void DemSolver::Impl::forces(bool update, bool stepped) {
   // the count advances by the test), a contact that starts or ends takes or frees its slot
   ch.m = 0;
   constexpr int kAhead = 24;
-  const int eLast = std::max(list.rowStart[nAll] - 1, 0);
+  const int eLast = std::max(search.list.rowStart[nAll] - 1, 0);
   for (std::size_t q = 0; q < nAll; ++q) {
-    const int e0 = list.rowStart[q], e1 = list.rowStart[q + 1];
+    const int e0 = search.list.rowStart[q], e1 = search.list.rowStart[q + 1];
     if (e0 == e1) continue;
-    const auto i = static_cast<std::size_t>(bins.binItems[q]);
+    const auto i = static_cast<std::size_t>(search.bins.binItems[q]);
     const Body& bi = B[i];
     const double ri = bi.r;
     const double xi[3] = {bi.x[0], bi.x[1], bi.x[2]};
@@ -180,7 +181,8 @@ void DemSolver::Impl::forces(bool update, bool stepped) {
         ch.r2[k] = r2;
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
-        const double dist = s == 0 ? xi[d] - bins.origin[d] : bins.origin[d] + bins.L[d] - xi[d];
+        const double dist = s == 0 ? xi[d] - search.bins.origin[d]
+                                   : search.bins.origin[d] + search.bins.L[d] - xi[d];
         touch = !(ri - dist <= 0);
         ch.u[k] = static_cast<int>(i);  // stand-in values for pass 2 (see pairChunk)
         ch.coef[k] = 0;
@@ -191,10 +193,10 @@ void DemSolver::Impl::forces(bool update, bool stepped) {
       }
       if (touch != (sl[e] >= 0)) {  // a contact starts or ends (rare)
         if (touch) {
-          sl[e] = hist.newSlot();
-          in.hS = hist.hS.data();  // the pool may have grown
+          sl[e] = search.hist.newSlot();
+          in.hS = search.hist.hS.data();  // the pool may have grown
         } else {
-          hist.freeSlot(sl[e]);
+          search.hist.freeSlot(sl[e]);
           sl[e] = -1;
         }
       }
@@ -215,9 +217,9 @@ double DemSolver::contactEnergy() const {
   const std::size_t n = p.nOwned;
   double e = 0;
   for (std::size_t q = 0; q < p.size(); ++q) {
-    const auto i = static_cast<std::size_t>(m.bins.binItems[q]);
-    for (int k = m.list.rowStart[q]; k < m.list.rowStart[q + 1]; ++k) {
-      const int j = m.list.nbr[static_cast<std::size_t>(k)];
+    const auto i = static_cast<std::size_t>(m.search.bins.binItems[q]);
+    for (int k = m.search.list.rowStart[q]; k < m.search.list.rowStart[q + 1]; ++k) {
+      const int j = m.search.list.nbr[static_cast<std::size_t>(k)];
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
         double r2 = 0;
@@ -231,8 +233,8 @@ double DemSolver::contactEnergy() const {
              detail::normalEnergy(m.model, c, rs - std::sqrt(r2), p.radius[i] * p.radius[u] / rs);
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
-        const double dist =
-            s == 0 ? p.x[d][i] - m.bins.origin[d] : m.bins.origin[d] + m.bins.L[d] - p.x[d][i];
+        const double dist = s == 0 ? p.x[d][i] - m.search.bins.origin[d]
+                                   : m.search.bins.origin[d] + m.search.bins.L[d] - p.x[d][i];
         const double delta = p.radius[i] - dist;
         if (delta > 0)
           e += detail::normalEnergy(m.model, m.wallC[static_cast<std::size_t>(p.material[i])],

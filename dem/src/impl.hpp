@@ -1,8 +1,7 @@
-// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its parts. Each part is a small
-// struct holding its data (bins.hpp, neighbours.hpp, history.hpp; the particle arrays and their
-// field table in coloc/dem/dem.hpp); the methods are defined in the file of their concept. The
-// particle exchange is a part that owns its state and works on what Impl lends it
-// (exchange.hpp), made once at setup.
+// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its parts. The neighbour search
+// (neighbour_search.hpp: bins, half Verlet list, contact-history pool) and the particle exchange
+// (exchange.hpp) are parts that own their state and work on what Impl passes or lends them; the
+// particle arrays and their field table are in coloc/dem/dem.hpp.
 //   dem.cpp        the sub-step (velocity Verlet), the rebuild sequence, the public interface
 //   setup.cpp      materials, bins, time-step check, initial particles, the exchange
 //   flow.cpp       face conditions, outflow removal, inflow insertion, DemFlow
@@ -12,7 +11,8 @@
 //                  layout: exchange_grid.cpp (process grid, three sweeps), exchange_tiled.cpp
 //                  (general boxes, one exchange each)
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
-//   neighbours.cpp  the half Verlet list build (and the history lookup of its entries)
+//   neighbours.cpp  the half Verlet list build (and the history lookup of its entries), the
+//                  rebuild check's reference positions
 //   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
 //   state.cpp      save/restore (checkpoints, re-balancing)
 #pragma once
@@ -31,6 +31,7 @@
 #include "exchange.hpp"
 #include "generate.hpp"
 #include "history.hpp"
+#include "neighbour_search.hpp"
 #include "neighbours.hpp"
 #include "pairs.hpp"
 #include "rows.hpp"
@@ -101,28 +102,20 @@ struct DemSolver::Impl {
   bool forceRebuild = false;
 
   // the parts
-  detail::Bins bins;
-  detail::NeighbourList list;
-  detail::HistoryPool hist;
+  /// Bins, half Verlet list, contact-history pool and the rebuild's scratch
+  /// (neighbour_search.hpp).
+  detail::NeighbourSearch search;
   /// Migration, ghost build and update (exchange.hpp): the process grid's or the tiled one,
   /// made at setup (setupBins) from the decomposition.
   std::unique_ptr<detail::ParticleExchange> exchange;
-  std::vector<int> inScr;  // scratch (grow-only)
-  // the (bin, id) re-sort's permutation, from sortByBin to the end of buildLists (perm[k]: the
-  // history row of particle k), in the rebuild's scratch (rebuildInts)
-  int* perm = nullptr;
+  std::vector<int> inScr;   // scratch (grow-only)
   detail::PairChunk chunk;  // the force loop's touching pairs (pairs.hpp)
   // the force loop's packed particles (pairs.hpp: Body). `packed`: the rows of `body` match
   // the particles (same order and count) since the last force computation, i.e. no rebuild
   // since (rebuild() clears it); the step then keeps them current: initialIntegrate writes the
   // owned bodies and resets the force and torque sums (gravity + fExt) after its half kick.
-  // From the start of a rebuild to the next force computation, which packs every body anew,
-  // their storage is the rebuild's int scratch (rebuildInts).
   std::vector<detail::Body> body;
   bool packed = false;
-  /// `count` ints of scratch in the bodies' storage (grown if needed), valid until the next force
-  /// computation; only inside a rebuild (packed is false).
-  int* rebuildInts(std::size_t count);
 
   long long rebuilds = 0, steps = 0;
   // what the last force computation saw (forces.cpp): contacts of owned particles, wall
@@ -139,8 +132,6 @@ struct DemSolver::Impl {
   void finalIntegrate();
   bool decideRebuild();
   void rebuild(bool first);
-  /// The owned positions as the rebuild check's reference (x0), at the end of a rebuild.
-  void keepPositions();
   void checkOverlap(double globalMax);
   std::string where() const;
   std::size_t memory() const;
@@ -149,16 +140,16 @@ struct DemSolver::Impl {
   template <class F>
   void memoryParts(F&& f) const {
     f("fields", detail::columnBytes(p));
-    f("bins", bins.bytes());
-    f("list.rows", detail::cap(list.rowStart));
-    f("list.nbr", detail::cap(list.nbr));
-    f("list.slot", detail::cap(list.slot));
-    f("hist.rows", detail::cap(hist.hStart));
-    f("hist.key_x0", detail::cap(hist.hKey));
-    f("hist.shear", detail::cap(hist.hS));
-    f("hist.free", detail::cap(hist.freeSlots));
+    f("bins", search.bins.bytes());
+    f("search.list.rows", detail::cap(search.list.rowStart));
+    f("search.list.nbr", detail::cap(search.list.nbr));
+    f("search.list.slot", detail::cap(search.list.slot));
+    f("search.hist.rows", detail::cap(search.hist.hStart));
+    f("search.hist.key_x0", detail::cap(search.hist.hKey));
+    f("search.hist.shear", detail::cap(search.hist.hS));
+    f("search.hist.free", detail::cap(search.hist.freeSlots));
     f("ghosts", exchange ? exchange->bytes() : 0);
-    f("scratch", detail::cap(inScr));
+    f("scratch", detail::cap(inScr) + search.scratchBytes());
     f("body", detail::cap(body));
   }
   /// memoryParts as bytes by name (fields by their own names, "field.x" ...).
@@ -177,13 +168,9 @@ struct DemSolver::Impl {
   void removeOutflow();
   void insertInflow();
   // history.cpp
-  void packHistory();
   /// Owned row i kept as row w (w <= i) while rows before it leave (migration, outflow), its
   /// packed contact histories [h0, h1) moved down to hw on.
   void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
-  // bins.cpp, neighbours.cpp
-  void sortByBin();
-  void buildLists();
   // forces.cpp
   /// Forces at the current state into f and torque; `stepped`: inside the step, where the owned
   /// bodies and the reset sums are current when `packed` (initialIntegrate).

@@ -28,7 +28,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   for (int k = 0; k < 3; ++k) g[k] = grav[k];
   overlapLimit = cfg.number("particles.overlap_limit");
   dtFraction = cfg.number("particles.dt_fraction");
-  hist.hStart.assign(1, 0);
+  search.hist.hStart.assign(1, 0);
   readMaterials(cfg);
   for (const auto& m : mats) rolling = rolling || m.rollingFriction > 0;
 
@@ -76,13 +76,13 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   // then fill them (growing ~23 arrays particle by particle cost a third of a 2M-particle set-up
   // in copies and page faults).
   {
-    const auto ownsX = [this](const double* x) { return bins.owns(x); };
+    const auto ownsX = [this](const double* x) { return search.bins.owns(x); };
     std::size_t count = 0;
-    detail::generate(cfg, info, bins.lo, bins.hi, ownsX,
+    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
                      [&count](const detail::NewParticle&) { ++count; });
     detail::resizeAll(p, count);
-    hist.hStart.assign(count + 1, 0);
-    detail::generate(cfg, info, bins.lo, bins.hi, ownsX,
+    search.hist.hStart.assign(count + 1, 0);
+    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
                      [this](const detail::NewParticle& q) { addParticle(q); });
   }
   checkTimeStep();
@@ -204,14 +204,14 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
   const BinLayout b = dec.isTiled()
                           ? binLayout(cfg, grid, boxLayoutOf(dec).cutPlanes(), dmax, skin, total)
                           : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
-  bins.setup(grid, b, dec.lo(), dec.hi());
+  search.bins.setup(grid, b, dec.lo(), dec.hi());
   // the particle exchange of the layout (exchange.hpp), lent the solver's state
   exchange = detail::makeExchange({.dec = dec,
                                    .comm = comm,
                                    .timers = timers,
                                    .p = p,
-                                   .hist = hist,
-                                   .bins = bins,
+                                   .hist = search.hist,
+                                   .bins = search.bins,
                                    .rc = rc,
                                    .where = [this] { return where(); }},
                                   b);
@@ -285,11 +285,11 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
     p.v[d][i] = q.v[d];
     p.omega[d][i] = p.f[d][i] = p.torque[d][i] = p.fExt[d][i] = 0;
   }
-  if (hist.hStart.size() < n + 1) {
-    ensure(hist.hStart, n + 1);
-    hist.hStart.resize(n + 1);
+  if (search.hist.hStart.size() < n + 1) {
+    ensure(search.hist.hStart, n + 1);
+    search.hist.hStart.resize(n + 1);
   }
-  hist.hStart[n] = hist.hStart[n - 1];
+  search.hist.hStart[n] = search.hist.hStart[n - 1];
 }
 
 }  // namespace coloc::dem
