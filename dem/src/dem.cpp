@@ -82,7 +82,8 @@ void DemSolver::Impl::substep() {
   time = static_cast<double>(steps) * dt;
 }
 
-// While no rebuild has reordered the particles since the last force computation (`packed`),
+// While no rebuild has reordered the particles since the last force computation
+// (ContactForces::packed, contact_forces.hpp),
 // initialIntegrate also does the first part of the next force computation, on the data it has
 // in hand: it writes the owned particles' packed rows for the force loop (pairs.hpp: Body) and,
 // after its half kick, resets the force and torque sums to gravity + fExt (the same values as
@@ -103,8 +104,8 @@ void DemSolver::Impl::initialIntegrate() {
   const double *m = p.mass.data(), *r = p.radius.data();
   const double *E0 = p.fExt[0].data(), *E1 = p.fExt[1].data(), *E2 = p.fExt[2].data();
   const double g0 = g[0], g1 = g[1], g2 = g[2];
-  Body* B = body.data();
-  const bool reset = packed;
+  Body* B = forces.bodies();
+  const bool reset = forces.packed();
   for (std::size_t b0 = 0; b0 < n; b0 += kIntBlock) {
     const std::size_t b1 = std::min(n, b0 + kIntBlock);
 #pragma omp simd
@@ -118,7 +119,7 @@ void DemSolver::Impl::initialIntegrate() {
         T0[i] = T1[i] = T2[i] = 0;
       }
     }
-    if (!packed) continue;
+    if (!reset) continue;
     for (std::size_t i = b0; i < b1; ++i)
       B[i] = Body{{X0[i], X1[i], X2[i]}, r[i], {V0[i], V1[i], V2[i]}, m[i]};
   }
@@ -148,11 +149,12 @@ std::string DemSolver::Impl::where() const {
 void DemSolver::Impl::checkOverlap(double globalMax) {
   if (globalMax <= overlapLimit) return;
   std::string msg;
-  if (tally.maxOverlap > overlapLimit) {
-    msg = "particle " + std::to_string(tally.maxOverlapId) + " overlaps " +
-          (tally.maxOverlapPartner < 0 ? std::string("a wall")
-                                       : "particle " + std::to_string(tally.maxOverlapPartner)) +
-          " by " + fmt(tally.maxOverlap) + " of the smaller radius" + where() +
+  const ContactTally& t = forces.tally();
+  if (t.maxOverlap > overlapLimit) {
+    msg = "particle " + std::to_string(t.maxOverlapId) + " overlaps " +
+          (t.maxOverlapPartner < 0 ? std::string("a wall")
+                                   : "particle " + std::to_string(t.maxOverlapPartner)) +
+          " by " + fmt(t.maxOverlap) + " of the smaller radius" + where() +
           " (limit particles.overlap_limit = " + fmt(overlapLimit) +
           "): reduce particles.dt, the velocities, or stiffen the material";
   }
@@ -171,7 +173,7 @@ bool DemSolver::Impl::decideRebuild() {
         m2 = std::numeric_limits<double>::max();
         break;
       }
-  double buf[2] = {m2, tally.maxOverlap};
+  double buf[2] = {m2, forces.tally().maxOverlap};
   comm.maxInPlace(std::span<double>(buf, 2));
   checkOverlap(buf[1]);
   return buf[0] > 0.25 * skin * skin;
@@ -181,7 +183,7 @@ bool DemSolver::Impl::decideRebuild() {
 // rebuild: history, migration, sort, ghosts, lists
 
 void DemSolver::Impl::rebuild(bool first) {
-  packed = false;  // the particles change order (and count): the next force loop packs them
+  forces.unpack();  // the particles change order (and count): the next force pass packs them
   {
     ScopedPhase t(timers, Phase::DemMigrate);
     if (!first) search.packHistory(p, dec, comm.size());
@@ -283,17 +285,17 @@ std::size_t DemSolver::memoryBytes() const {
   return impl_->memory();
 }
 long long DemSolver::localContacts() const {
-  return impl_->tally.contacts;
+  return impl_->forces.tally().contacts;
 }
 long long DemSolver::localWallContacts() const {
-  return impl_->tally.walls;
+  return impl_->forces.tally().walls;
 }
 
 Json DemSolver::diagnostics() const {
   const auto& m = *impl_;
   double loc[6] = {static_cast<double>(m.p.nOwned),
-                   static_cast<double>(m.tally.contacts),
-                   static_cast<double>(m.tally.walls),
+                   static_cast<double>(m.forces.tally().contacts),
+                   static_cast<double>(m.forces.tally().walls),
                    static_cast<double>(m.p.nGhost),
                    static_cast<double>(m.search.list.nbr.size()),
                    static_cast<double>(m.memory())};

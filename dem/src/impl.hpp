@@ -13,7 +13,8 @@
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
 //   neighbours.cpp  the half Verlet list build (and the history lookup of its entries), the
 //                  rebuild check's reference positions
-//   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
+//   forces.cpp     ContactForces (contact_forces.hpp): contact and wall forces (the pair law on a
+//                  chunk: pairs.hpp), the tally; contact energy
 //   state.cpp      save/restore (checkpoints, re-balancing)
 #pragma once
 
@@ -28,6 +29,7 @@
 #include "buffers.hpp"
 #include "coloc/dem/dem.hpp"
 #include "contact.hpp"
+#include "contact_forces.hpp"
 #include "exchange.hpp"
 #include "generate.hpp"
 #include "history.hpp"
@@ -38,6 +40,8 @@
 
 namespace coloc::dem {
 
+using detail::ContactLaw;
+using detail::ContactTally;
 using detail::Material;
 using detail::Model;
 using detail::PairCoeff;
@@ -75,15 +79,10 @@ struct DemSolver::Impl {
   ParticleStore p;
 
   // physics
-  Model model = Model::HertzMindlin;
   double dt = 1e-5, time = 0;
   bool frozen = false;
   double g[3] = {0, 0, 0};
   std::vector<Material> mats;
-  int nMat = 0;
-  std::vector<PairCoeff> pairC;  // [a * nMat + b]
-  std::vector<PairCoeff> wallC;  // [a]
-  bool rolling = false;          // any material pair with rolling resistance
   std::array<std::array<bool, 2>, 3> wallOn{};
   double skin = 0, rc = 0, overlapLimit = 0.2, dtFraction = 0.2;
 
@@ -108,23 +107,12 @@ struct DemSolver::Impl {
   /// Migration, ghost build and update (exchange.hpp): the process grid's or the tiled one,
   /// made at setup (setupBins) from the decomposition.
   std::unique_ptr<detail::ParticleExchange> exchange;
-  std::vector<int> inScr;   // scratch (grow-only)
-  detail::PairChunk chunk;  // the force loop's touching pairs (pairs.hpp)
-  // the force loop's packed particles (pairs.hpp: Body). `packed`: the rows of `body` match
-  // the particles (same order and count) since the last force computation, i.e. no rebuild
-  // since (rebuild() clears it); the step then keeps them current: initialIntegrate writes the
-  // owned bodies and resets the force and torque sums (gravity + fExt) after its half kick.
-  std::vector<detail::Body> body;
-  bool packed = false;
+  std::vector<int> inScr;  // scratch (grow-only)
+  /// Contact and wall forces: the contact laws, the packed bodies and their protocol, the chunk,
+  /// the tally of the last computation (contact_forces.hpp).
+  detail::ContactForces forces;
 
   long long rebuilds = 0, steps = 0;
-  // what the last force computation saw (forces.cpp): contacts of owned particles, wall
-  // contacts, the largest overlap (fraction of the smaller radius) and its pair
-  struct ContactTally {
-    long long contacts = 0, walls = 0;
-    double maxOverlap = 0;
-    std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
-  } tally;
 
   // dem.cpp: the step
   void substep();
@@ -150,7 +138,7 @@ struct DemSolver::Impl {
     f("search.hist.free", detail::cap(search.hist.freeSlots));
     f("ghosts", exchange ? exchange->bytes() : 0);
     f("scratch", detail::cap(inScr) + search.scratchBytes());
-    f("body", detail::cap(body));
+    f("body", forces.bodyBytes());
   }
   /// memoryParts as bytes by name (fields by their own names, "field.x" ...).
   Json memoryByPart() const;
@@ -172,11 +160,8 @@ struct DemSolver::Impl {
   /// packed contact histories [h0, h1) moved down to hw on.
   void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
   // forces.cpp
-  /// Forces at the current state into f and torque; `stepped`: inside the step, where the owned
-  /// bodies and the reset sums are current when `packed` (initialIntegrate).
+  /// Forces at the current state into f and torque (ContactForces::compute).
   void computeForces(bool update, bool stepped = false);
-  template <Model M, bool Rolling>
-  void forces(bool update, bool stepped);
   // state.cpp
   int ownerRank(const double* x) const;
   void restore(DemState& st);

@@ -235,9 +235,9 @@ void DemSolver::Impl::restore(DemState& st) {
   std::sort(xNow.begin(), xNow.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t i = 0; i < n && err.empty(); ++i)
-    if (p.material[i] < 0 || p.material[i] >= nMat)
+    if (p.material[i] < 0 || p.material[i] >= forces.law.nMat)
       err = "restored particle " + std::to_string(p.id[i]) + " has material " +
-            std::to_string(p.material[i]) + " (" + std::to_string(nMat) + " declared)";
+            std::to_string(p.material[i]) + " (" + std::to_string(forces.law.nMat) + " declared)";
   comm.raiseIfAny(err);
   // 2. every history to the rank of its holder; `row` = the holder's local row
   std::vector<double> mine;
@@ -323,7 +323,7 @@ void DemSolver::Impl::restore(DemState& st) {
         std::copy(keep.begin() + static_cast<std::ptrdiff_t>(o),
                   keep.begin() + static_cast<std::ptrdiff_t>(o + n), (*a)[k].begin());
   }
-  checkOverlap(comm.max(tally.maxOverlap));
+  checkOverlap(comm.max(forces.tally().maxOverlap));
 }
 
 DemState DemSolver::Impl::save() {
