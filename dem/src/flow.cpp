@@ -72,7 +72,7 @@ void DemSolver::Impl::insertInflow() {
   // ghosts: every particle within a diameter of it is one); one allreduce of the verdicts, and
   // the accepted candidates enter while the others wait for the next step (another site).
   // Everything but the overlap test is computed alike on every rank.
-  const double t = static_cast<double>(steps) * dt;
+  const double t = static_cast<double>(steps) * integrator.dt;
   const std::size_t nIn = inflow.size();
   std::size_t total = 0;
   for (std::size_t n = 0; n < nIn; ++n) {

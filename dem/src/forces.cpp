@@ -303,7 +303,7 @@ void ContactForces::run(const ForceInputs& in, bool update, bool stepped) {
 }
 
 void DemSolver::Impl::computeForces(bool update, bool stepped) {
-  forces.compute({p, search, dt, g}, update, stepped);
+  forces.compute({p, search, integrator.dt, integrator.g}, update, stepped);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -13,6 +13,7 @@
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
 //   neighbours.cpp  the half Verlet list build (and the history lookup of its entries), the
 //                  rebuild check's reference positions
+//   integrator.cpp Integrator (integrator.hpp): velocity Verlet, the half kicks and the drift
 //   forces.cpp     ContactForces (contact_forces.hpp): contact and wall forces (the pair law on a
 //                  chunk: pairs.hpp), the tally; contact energy
 //   state.cpp      save/restore (checkpoints, re-balancing)
@@ -33,6 +34,7 @@
 #include "exchange.hpp"
 #include "generate.hpp"
 #include "history.hpp"
+#include "integrator.hpp"
 #include "neighbour_search.hpp"
 #include "neighbours.hpp"
 #include "pairs.hpp"
@@ -79,9 +81,8 @@ struct DemSolver::Impl {
   ParticleStore p;
 
   // physics
-  double dt = 1e-5, time = 0;
+  double time = 0;
   bool frozen = false;
-  double g[3] = {0, 0, 0};
   std::vector<Material> mats;
   std::array<std::array<bool, 2>, 3> wallOn{};
   double skin = 0, rc = 0, overlapLimit = 0.2, dtFraction = 0.2;
@@ -111,13 +112,21 @@ struct DemSolver::Impl {
   /// Contact and wall forces: the contact laws, the packed bodies and their protocol, the chunk,
   /// the tally of the last computation (contact_forces.hpp).
   detail::ContactForces forces;
+  /// Velocity Verlet: the time step and gravity (integrator.hpp).
+  detail::Integrator integrator;
 
   long long rebuilds = 0, steps = 0;
 
   // dem.cpp: the step
   void substep();
-  void initialIntegrate();
-  void finalIntegrate();
+  /// The clock after a sub-step (steps, time).
+  void advanceClock();
+  /// f() timed as phase ph.
+  template <class F>
+  decltype(auto) timed(Phase ph, F&& f) {
+    ScopedPhase t(timers, ph);
+    return f();
+  }
   bool decideRebuild();
   void rebuild(bool first);
   void checkOverlap(double globalMax);

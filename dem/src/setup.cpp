@@ -22,11 +22,11 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     : dec(d), comm(d.comm()), timers(t) {
   ScopedPhase setup(timers, Phase::Setup);
   const auto& grid = dec.grid();
-  dt = cfg.number("particles.dt");
+  integrator.dt = cfg.number("particles.dt");
   forces.law.model =
       cfg.string("particles.contact_model") == "linear" ? Model::Linear : Model::HertzMindlin;
   const auto grav = cfg.vec3("gravity");
-  for (int k = 0; k < 3; ++k) g[k] = grav[k];
+  for (int k = 0; k < 3; ++k) integrator.g[k] = grav[k];
   overlapLimit = cfg.number("particles.overlap_limit");
   dtFraction = cfg.number("particles.dt_fraction");
   search.hist.hStart.assign(1, 0);
@@ -267,7 +267,7 @@ void DemSolver::Impl::checkTimeStep() {
   comm.maxInPlace(std::span<double>(negMin));
   std::vector<double> rMin(negMin.size());
   for (std::size_t m = 0; m < rMin.size(); ++m) rMin[m] = -negMin[m];
-  detail::checkTimeStep({dt, dtFraction, forces.law.model,
+  detail::checkTimeStep({integrator.dt, dtFraction, forces.law.model,
                          forces.law.pair.empty() ? 0.0 : forces.law.pair[0].kn, mats, inflow,
                          rMin});
 }
