@@ -7,7 +7,7 @@
 #include <span>
 #include <string>
 
-#include "impl.hpp"
+#include "neighbour_search.hpp"
 #include "rows.hpp"
 
 namespace coloc::dem {
@@ -61,10 +61,12 @@ void Bins::sort(const ParticleStore& p, std::size_t n, int* items, std::vector<i
   }
 }
 
-void DemSolver::Impl::sortByBin() {
+void NeighbourSearch::sortByBin(ParticleStore& p) {
   // owned particles in (bin, id) order: perm[k] is the particle that goes to position k
   const std::size_t n = p.nOwned;
-  perm = rebuildInts(n);
+  ensure(scratch_, n);
+  scratch_.resize(n);
+  int* const perm = scratch_.data();
   bins.sort(p, n, perm, list.nbr, list.slot, 0);  // the list is dead until its build
   // applied in place, cycle by cycle (no scratch array: 16 bytes per particle less); a visited
   // position is marked by complementing its perm entry, restored after each array

@@ -32,7 +32,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <new>
 #include <span>
 
 #include "impl.hpp"
@@ -45,100 +44,24 @@ using namespace detail;
 // ---------------------------------------------------------------------------------------------
 // time step
 
+// One sub-step, phase by phase (as LAMMPS's verlet.cpp sequences its parts).
 void DemSolver::Impl::substep() {
-  if (frozen) {
-    ++steps;
-    time = static_cast<double>(steps) * dt;  // no accumulated round-off
-    return;
-  }
-  if (!inflow.empty()) {
-    ScopedPhase t(timers, Phase::DemNeighbour);
-    insertInflow();
-  }
-  {
-    ScopedPhase t(timers, Phase::DemIntegrate);
-    initialIntegrate();
-  }
-  bool again;
+  if (frozen) return advanceClock();
+  if (!inflow.empty()) timed(Phase::DemNeighbour, [&] { insertInflow(); });
+  timed(Phase::DemIntegrate, [&] { integrator.initialIntegrate(p, forces); });
   timers.syncPoint(comm);
-  {
-    ScopedPhase t(timers, Phase::DemNeighbour);
-    again = decideRebuild();
-  }
-  if (again) {
+  if (timed(Phase::DemNeighbour, [&] { return decideRebuild(); }))
     rebuild(false);
-  } else {
-    ScopedPhase t(timers, Phase::DemGhost);
-    exchange->updateGhosts();
-  }
-  {
-    ScopedPhase t(timers, Phase::DemForce);
-    computeForces(true, true);
-  }
-  {
-    ScopedPhase t(timers, Phase::DemIntegrate);
-    finalIntegrate();
-  }
+  else
+    timed(Phase::DemGhost, [&] { exchange->updateGhosts(); });
+  timed(Phase::DemForce, [&] { computeForces(true, true); });
+  timed(Phase::DemIntegrate, [&] { integrator.finalIntegrate(p); });
+  advanceClock();
+}
+
+void DemSolver::Impl::advanceClock() {
   ++steps;
-  time = static_cast<double>(steps) * dt;
-}
-
-// While no rebuild has reordered the particles since the last force computation (`packed`),
-// initialIntegrate also does the first part of the next force computation, on the data it has
-// in hand: it writes the owned particles' packed rows for the force loop (pairs.hpp: Body) and,
-// after its half kick, resets the force and torque sums to gravity + fExt (the same values as
-// the force loop's own reset: same bits). By blocks of kIntBlock particles: the columns on the
-// vector units, then the packed rows copied whole (line stores) while the block is in L1.
-namespace {
-constexpr std::size_t kIntBlock = 256;
-}
-
-void DemSolver::Impl::initialIntegrate() {
-  const std::size_t n = p.nOwned;
-  const double h = 0.5 * dt;
-  double *X0 = p.x[0].data(), *X1 = p.x[1].data(), *X2 = p.x[2].data();
-  double *V0 = p.v[0].data(), *V1 = p.v[1].data(), *V2 = p.v[2].data();
-  double *W0 = p.omega[0].data(), *W1 = p.omega[1].data(), *W2 = p.omega[2].data();
-  double *F0 = p.f[0].data(), *F1 = p.f[1].data(), *F2 = p.f[2].data();
-  double *T0 = p.torque[0].data(), *T1 = p.torque[1].data(), *T2 = p.torque[2].data();
-  const double *m = p.mass.data(), *r = p.radius.data();
-  const double *E0 = p.fExt[0].data(), *E1 = p.fExt[1].data(), *E2 = p.fExt[2].data();
-  const double g0 = g[0], g1 = g[1], g2 = g[2];
-  Body* B = body.data();
-  const bool reset = packed;
-  for (std::size_t b0 = 0; b0 < n; b0 += kIntBlock) {
-    const std::size_t b1 = std::min(n, b0 + kIntBlock);
-#pragma omp simd
-    for (std::size_t i = b0; i < b1; ++i) {
-      V0[i] += h * F0[i] / m[i], V1[i] += h * F1[i] / m[i], V2[i] += h * F2[i] / m[i];
-      X0[i] += dt * V0[i], X1[i] += dt * V1[i], X2[i] += dt * V2[i];
-      const double I = 0.4 * m[i] * r[i] * r[i];
-      W0[i] += h * T0[i] / I, W1[i] += h * T1[i] / I, W2[i] += h * T2[i] / I;
-      if (reset) {
-        F0[i] = m[i] * g0 + E0[i], F1[i] = m[i] * g1 + E1[i], F2[i] = m[i] * g2 + E2[i];
-        T0[i] = T1[i] = T2[i] = 0;
-      }
-    }
-    if (!packed) continue;
-    for (std::size_t i = b0; i < b1; ++i)
-      B[i] = Body{{X0[i], X1[i], X2[i]}, r[i], {V0[i], V1[i], V2[i]}, m[i]};
-  }
-}
-
-void DemSolver::Impl::finalIntegrate() {
-  const std::size_t n = p.nOwned;
-  const double h = 0.5 * dt;
-  double *V0 = p.v[0].data(), *V1 = p.v[1].data(), *V2 = p.v[2].data();
-  double *W0 = p.omega[0].data(), *W1 = p.omega[1].data(), *W2 = p.omega[2].data();
-  const double *F0 = p.f[0].data(), *F1 = p.f[1].data(), *F2 = p.f[2].data();
-  const double *T0 = p.torque[0].data(), *T1 = p.torque[1].data(), *T2 = p.torque[2].data();
-  const double *m = p.mass.data(), *r = p.radius.data();
-#pragma omp simd
-  for (std::size_t i = 0; i < n; ++i) {
-    V0[i] += h * F0[i] / m[i], V1[i] += h * F1[i] / m[i], V2[i] += h * F2[i] / m[i];
-    const double I = 0.4 * m[i] * r[i] * r[i];
-    W0[i] += h * T0[i] / I, W1[i] += h * T1[i] / I, W2[i] += h * T2[i] / I;
-  }
+  time = static_cast<double>(steps) * integrator.dt;  // no accumulated round-off
 }
 
 std::string DemSolver::Impl::where() const {
@@ -149,11 +72,12 @@ std::string DemSolver::Impl::where() const {
 void DemSolver::Impl::checkOverlap(double globalMax) {
   if (globalMax <= overlapLimit) return;
   std::string msg;
-  if (tally.maxOverlap > overlapLimit) {
-    msg = "particle " + std::to_string(tally.maxOverlapId) + " overlaps " +
-          (tally.maxOverlapPartner < 0 ? std::string("a wall")
-                                       : "particle " + std::to_string(tally.maxOverlapPartner)) +
-          " by " + fmt(tally.maxOverlap) + " of the smaller radius" + where() +
+  const ContactTally& t = forces.tally();
+  if (t.maxOverlap > overlapLimit) {
+    msg = "particle " + std::to_string(t.maxOverlapId) + " overlaps " +
+          (t.maxOverlapPartner < 0 ? std::string("a wall")
+                                   : "particle " + std::to_string(t.maxOverlapPartner)) +
+          " by " + fmt(t.maxOverlap) + " of the smaller radius" + where() +
           " (limit particles.overlap_limit = " + fmt(overlapLimit) +
           "): reduce particles.dt, the velocities, or stiffen the material";
   }
@@ -161,20 +85,8 @@ void DemSolver::Impl::checkOverlap(double globalMax) {
 }
 
 bool DemSolver::Impl::decideRebuild() {
-  double m2 = 0;
+  double m2 = search.maxDisplacement2(p);
   const std::size_t n = p.nOwned;
-  // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
-  // double first, so a lost particle forces the rebuild)
-  const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
-  const double *X0 = hist.x0(0, n), *Y0 = hist.x0(1, n), *Z0 = hist.x0(2, n);
-  constexpr double kBig = std::numeric_limits<double>::max();
-#pragma omp simd reduction(max : m2)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double dx = X[i] - X0[i], dy = Y[i] - Y0[i], dz = Z[i] - Z0[i];
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    const double c = d2 <= kBig ? d2 : kBig;
-    m2 = m2 > c ? m2 : c;
-  }
   // a centre beyond an outflow face, or particles entering, rebuild now (removal, insertion)
   if (forceRebuild) m2 = std::numeric_limits<double>::max();
   forceRebuild = false;
@@ -184,7 +96,7 @@ bool DemSolver::Impl::decideRebuild() {
         m2 = std::numeric_limits<double>::max();
         break;
       }
-  double buf[2] = {m2, tally.maxOverlap};
+  double buf[2] = {m2, forces.tally().maxOverlap};
   comm.maxInPlace(std::span<double>(buf, 2));
   checkOverlap(buf[1]);
   return buf[0] > 0.25 * skin * skin;
@@ -194,10 +106,10 @@ bool DemSolver::Impl::decideRebuild() {
 // rebuild: history, migration, sort, ghosts, lists
 
 void DemSolver::Impl::rebuild(bool first) {
-  packed = false;  // the particles change order (and count): the next force loop packs them
+  forces.unpack();  // the particles change order (and count): the next force pass packs them
   {
     ScopedPhase t(timers, Phase::DemMigrate);
-    if (!first) packHistory();
+    if (!first) search.packHistory(p, dec, comm.size());
     if (anyOutflow) removeOutflow();
     if (!incoming.empty()) {
       p.nGhost = 0;
@@ -208,7 +120,7 @@ void DemSolver::Impl::rebuild(bool first) {
   }
   {
     ScopedPhase t(timers, Phase::DemNeighbour);
-    sortByBin();
+    search.sortByBin(p);
   }
   {
     ScopedPhase t(timers, Phase::DemGhost);
@@ -216,28 +128,10 @@ void DemSolver::Impl::rebuild(bool first) {
   }
   {
     ScopedPhase t(timers, Phase::DemNeighbour);
-    buildLists();
-    keepPositions();
+    search.buildLists(p, skin, wallOn);
+    search.keepPositions(p);
   }
   if (!first) ++rebuilds;
-}
-
-int* DemSolver::Impl::rebuildInts(std::size_t count) {
-  const std::size_t lines = (count * sizeof(int) + sizeof(Body) - 1) / sizeof(Body) + 1;
-  ensure(body, lines);
-  if (body.size() < lines) body.resize(lines);
-  // the ints take over the storage (the bodies are dead until the next force computation, which
-  // constructs them anew)
-  return std::launder(::new (static_cast<void*>(body.data())) int[count]);
-}
-
-void DemSolver::Impl::keepPositions() {
-  // x0 in the keys' array (history.hpp), which the list build has read for the last time
-  const std::size_t n = p.nOwned;
-  ensure(hist.hKey, 3 * n);
-  hist.hKey.resize(3 * n);
-  for (int d = 0; d < 3; ++d)
-    std::copy_n(p.x[d].begin(), n, hist.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
 }
 
 std::size_t DemSolver::Impl::memory() const {
@@ -280,7 +174,7 @@ void DemSolver::substep() {
   impl_->substep();
 }
 double DemSolver::dt() const {
-  return impl_->dt;
+  return impl_->integrator.dt;
 }
 double DemSolver::time() const {
   return impl_->time;
@@ -305,7 +199,7 @@ double DemSolver::skin() const {
   return impl_->skin;
 }
 std::array<double, 3> DemSolver::binSize() const {
-  return impl_->bins.bs;
+  return impl_->search.bins.bs;
 }
 long long DemSolver::rebuildCount() const {
   return impl_->rebuilds;
@@ -314,17 +208,20 @@ std::size_t DemSolver::memoryBytes() const {
   return impl_->memory();
 }
 long long DemSolver::localContacts() const {
-  return impl_->tally.contacts;
+  return impl_->forces.tally().contacts;
 }
 long long DemSolver::localWallContacts() const {
-  return impl_->tally.walls;
+  return impl_->forces.tally().walls;
 }
 
 Json DemSolver::diagnostics() const {
   const auto& m = *impl_;
-  double loc[6] = {static_cast<double>(m.p.nOwned),        static_cast<double>(m.tally.contacts),
-                   static_cast<double>(m.tally.walls),     static_cast<double>(m.p.nGhost),
-                   static_cast<double>(m.list.nbr.size()), static_cast<double>(m.memory())};
+  double loc[6] = {static_cast<double>(m.p.nOwned),
+                   static_cast<double>(m.forces.tally().contacts),
+                   static_cast<double>(m.forces.tally().walls),
+                   static_cast<double>(m.p.nGhost),
+                   static_cast<double>(m.search.list.nbr.size()),
+                   static_cast<double>(m.memory())};
   m.comm.sumInPlace(std::span<double>(loc, 6));
   const double n = std::max(1.0, loc[0]);
   Json j;
@@ -347,8 +244,8 @@ Json DemSolver::diagnostics() const {
   }
   j["interaction_range"] = m.rc;
   j["skin"] = m.skin;
-  j["bin_size"] = {m.bins.bs[0], m.bins.bs[1], m.bins.bs[2]};
-  j["dt"] = m.dt;
+  j["bin_size"] = {m.search.bins.bs[0], m.search.bins.bs[1], m.search.bins.bs[2]};
+  j["dt"] = m.integrator.dt;
   j["frozen"] = m.frozen;
   // flow: mass in (initial + inflow) = mass out (outflow faces) + mass held
   const DemFlow f = m.globalFlow();

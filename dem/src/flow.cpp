@@ -26,11 +26,11 @@ void DemSolver::Impl::setupFaces(const Config& cfg) {
 bool DemSolver::Impl::beyondOutflow(std::size_t i, int* which) const {
   for (int d = 0; d < 3; ++d) {
     const double x = p.x[d][i];
-    if (face[d][0] == Face::Outflow && x < bins.origin[d]) {
+    if (face[d][0] == Face::Outflow && x < search.bins.origin[d]) {
       if (which) *which = 2 * d;
       return true;
     }
-    if (face[d][1] == Face::Outflow && x > bins.origin[d] + bins.L[d]) {
+    if (face[d][1] == Face::Outflow && x > search.bins.origin[d] + search.bins.L[d]) {
       if (which) *which = 2 * d + 1;
       return true;
     }
@@ -46,7 +46,7 @@ void DemSolver::Impl::removeOutflow() {
   std::size_t w = 0;
   int hw = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const int h0 = hist.hStart[i], h1 = hist.hStart[i + 1];
+    const int h0 = search.hist.hStart[i], h1 = search.hist.hStart[i + 1];
     int fc = 0;
     if (beyondOutflow(i, &fc)) {
       ++flow.countOut;
@@ -60,7 +60,7 @@ void DemSolver::Impl::removeOutflow() {
   if (w == n) return;
   p.nOwned = w;
   p.nGhost = 0;
-  hist.truncate(w, hw);
+  search.hist.truncate(w, hw);
 }
 
 void DemSolver::Impl::insertInflow() {
@@ -72,7 +72,7 @@ void DemSolver::Impl::insertInflow() {
   // ghosts: every particle within a diameter of it is one); one allreduce of the verdicts, and
   // the accepted candidates enter while the others wait for the next step (another site).
   // Everything but the overlap test is computed alike on every rank.
-  const double t = static_cast<double>(steps) * dt;
+  const double t = static_cast<double>(steps) * integrator.dt;
   const std::size_t nIn = inflow.size();
   std::size_t total = 0;
   for (std::size_t n = 0; n < nIn; ++n) {
@@ -118,8 +118,8 @@ void DemSolver::Impl::insertInflow() {
       q.x[ab[k]] =
           f.pmin[k] + (static_cast<double>(ij[k]) + 0.5) * f.s +
           free * (2.0 * detail::uniform01(seed, uid, stream + static_cast<std::uint64_t>(k)) - 1.0);
-    q.x[f.axis] = f.side == 0 ? bins.origin[f.axis] + 0.5 * f.s
-                              : bins.origin[f.axis] + bins.L[f.axis] - 0.5 * f.s;
+    q.x[f.axis] = f.side == 0 ? search.bins.origin[f.axis] + 0.5 * f.s
+                              : search.bins.origin[f.axis] + search.bins.L[f.axis] - 0.5 * f.s;
     for (int d = 0; d < 3; ++d) {
       q.v[d] = f.v[static_cast<std::size_t>(d)];
       if (f.spread > 0)
@@ -130,15 +130,17 @@ void DemSolver::Impl::insertInflow() {
   const auto overlaps = [&](const detail::NewParticle& q) {
     int b[3];
     for (int d = 0; d < 3; ++d)
-      b[d] = static_cast<int>(std::clamp(bins.gbinRaw(q.x[d], d) - bins.binLo[d], 0LL,
-                                         static_cast<long long>(bins.nb[d] - 1))) +
+      b[d] = static_cast<int>(std::clamp(search.bins.gbinRaw(q.x[d], d) - search.bins.binLo[d], 0LL,
+                                         static_cast<long long>(search.bins.nb[d] - 1))) +
              1;
     for (int z = b[2] - 1; z <= b[2] + 1; ++z)
       for (int y = b[1] - 1; y <= b[1] + 1; ++y)
         for (int x = b[0] - 1; x <= b[0] + 1; ++x) {
-          const auto bin = static_cast<std::size_t>(x + bins.nbx[0] * (y + bins.nbx[1] * z));
-          for (int e = bins.binStart[bin]; e < bins.binStart[bin + 1]; ++e) {
-            const auto i = static_cast<std::size_t>(bins.binItems[static_cast<std::size_t>(e)]);
+          const auto bin =
+              static_cast<std::size_t>(x + search.bins.nbx[0] * (y + search.bins.nbx[1] * z));
+          for (int e = search.bins.binStart[bin]; e < search.bins.binStart[bin + 1]; ++e) {
+            const auto i =
+                static_cast<std::size_t>(search.bins.binItems[static_cast<std::size_t>(e)]);
             double r2 = 0;
             for (int d = 0; d < 3; ++d) r2 += (p.x[d][i] - q.x[d]) * (p.x[d][i] - q.x[d]);
             const double rs = p.radius[i] + q.radius;
@@ -156,7 +158,7 @@ void DemSolver::Impl::insertInflow() {
         std::min(static_cast<long long>(flow.waiting[n].size()), inflow[n].na * inflow[n].nb);
     for (long long j = 0; j < m; ++j, ++c) {
       candidate(n, j, q);
-      if (bins.owns(q.x) && overlaps(q)) inScr[c] = 1;
+      if (search.bins.owns(q.x) && overlaps(q)) inScr[c] = 1;
     }
   }
   comm.maxInPlace(std::span<int>(inScr.data(), total));
@@ -175,7 +177,7 @@ void DemSolver::Impl::insertInflow() {
       ++flow.inserted[n];
       ++flow.countIn;
       forceRebuild = true;
-      if (bins.owns(q.x)) {
+      if (search.bins.owns(q.x)) {
         ensure(incoming, incoming.size() + 1);
         incoming.push_back(q);
       }

@@ -50,10 +50,10 @@ void detail::keepRow(ParticleStore& p, HistoryPool& hist, std::size_t i, std::si
 }
 
 void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
-  detail::keepRow(p, hist, i, w, h0, h1, hw);
+  detail::keepRow(p, search.hist, i, w, h0, h1, hw);
 }
 
-void DemSolver::Impl::packHistory() {
+void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks) {
   // The history pool becomes rows per owned particle (the format migration carries and the list
   // build reads), keyed by the partner's global id (walls: -1..-6), shear as seen from the row's
   // particle. An owned-ghost pair has one row, under its owned particle; an owned-owned pair one
@@ -63,7 +63,9 @@ void DemSolver::Impl::packHistory() {
   // live pool slots are permuted into row order (no second pool).
   const std::size_t n = p.nOwned, nAll = p.size();
   // scratch: the destination code of every particle, then the row cursors
-  int* const code = rebuildInts(2 * n);
+  ensure(scratch_, 2 * n);
+  scratch_.resize(2 * n);
+  int* const code = scratch_.data();
   int* const cur = code + n;
   for (std::size_t i = 0; i < n; ++i) {  // destination rank and periodic wrap of every particle
     double x[3];
@@ -80,7 +82,7 @@ void DemSolver::Impl::packHistory() {
         }
       }
     }
-    code[i] = (comm.size() > 1 ? ownerRank(x) * 27 : 0) + wrap;
+    code[i] = (nRanks > 1 ? bins.ownerRank(dec, x) * 27 : 0) + wrap;
   }
   const auto dup = [&](std::size_t a, int j) {
     return a < n && j >= 0 && static_cast<std::size_t>(j) < n &&

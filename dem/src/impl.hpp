@@ -1,8 +1,7 @@
-// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its parts. Each part is a small
-// struct holding its data (bins.hpp, neighbours.hpp, history.hpp; the particle arrays and their
-// field table in coloc/dem/dem.hpp); the methods are defined in the file of their concept. The
-// particle exchange is a part that owns its state and works on what Impl lends it
-// (exchange.hpp), made once at setup.
+// dem/src/impl.hpp — DemSolver::Impl: the solver composed of its parts. The neighbour search
+// (neighbour_search.hpp: bins, half Verlet list, contact-history pool) and the particle exchange
+// (exchange.hpp) are parts that own their state and work on what Impl passes or lends them; the
+// particle arrays and their field table are in coloc/dem/dem.hpp.
 //   dem.cpp        the sub-step (velocity Verlet), the rebuild sequence, the public interface
 //   setup.cpp      materials, bins, time-step check, initial particles, the exchange
 //   flow.cpp       face conditions, outflow removal, inflow insertion, DemFlow
@@ -12,8 +11,11 @@
 //                  layout: exchange_grid.cpp (process grid, three sweeps), exchange_tiled.cpp
 //                  (general boxes, one exchange each)
 //   bins.cpp       the counting sort by bin, the (bin, id) re-sort of owned particles
-//   neighbours.cpp  the half Verlet list build (and the history lookup of its entries)
-//   forces.cpp     contact and wall forces (the pair law on a chunk: pairs.hpp), contact energy
+//   neighbours.cpp  the half Verlet list build (and the history lookup of its entries), the
+//                  rebuild check's reference positions
+//   integrator.cpp Integrator (integrator.hpp): velocity Verlet, the half kicks and the drift
+//   forces.cpp     ContactForces (contact_forces.hpp): contact and wall forces (the pair law on a
+//                  chunk: pairs.hpp), the tally; contact energy
 //   state.cpp      save/restore (checkpoints, re-balancing)
 #pragma once
 
@@ -28,15 +30,20 @@
 #include "buffers.hpp"
 #include "coloc/dem/dem.hpp"
 #include "contact.hpp"
+#include "contact_forces.hpp"
 #include "exchange.hpp"
 #include "generate.hpp"
 #include "history.hpp"
+#include "integrator.hpp"
+#include "neighbour_search.hpp"
 #include "neighbours.hpp"
 #include "pairs.hpp"
 #include "rows.hpp"
 
 namespace coloc::dem {
 
+using detail::ContactLaw;
+using detail::ContactTally;
 using detail::Material;
 using detail::Model;
 using detail::PairCoeff;
@@ -74,15 +81,9 @@ struct DemSolver::Impl {
   ParticleStore p;
 
   // physics
-  Model model = Model::HertzMindlin;
-  double dt = 1e-5, time = 0;
+  double time = 0;
   bool frozen = false;
-  double g[3] = {0, 0, 0};
   std::vector<Material> mats;
-  int nMat = 0;
-  std::vector<PairCoeff> pairC;  // [a * nMat + b]
-  std::vector<PairCoeff> wallC;  // [a]
-  bool rolling = false;          // any material pair with rolling resistance
   std::array<std::array<bool, 2>, 3> wallOn{};
   double skin = 0, rc = 0, overlapLimit = 0.2, dtFraction = 0.2;
 
@@ -101,46 +102,33 @@ struct DemSolver::Impl {
   bool forceRebuild = false;
 
   // the parts
-  detail::Bins bins;
-  detail::NeighbourList list;
-  detail::HistoryPool hist;
+  /// Bins, half Verlet list, contact-history pool and the rebuild's scratch
+  /// (neighbour_search.hpp).
+  detail::NeighbourSearch search;
   /// Migration, ghost build and update (exchange.hpp): the process grid's or the tiled one,
   /// made at setup (setupBins) from the decomposition.
   std::unique_ptr<detail::ParticleExchange> exchange;
   std::vector<int> inScr;  // scratch (grow-only)
-  // the (bin, id) re-sort's permutation, from sortByBin to the end of buildLists (perm[k]: the
-  // history row of particle k), in the rebuild's scratch (rebuildInts)
-  int* perm = nullptr;
-  detail::PairChunk chunk;  // the force loop's touching pairs (pairs.hpp)
-  // the force loop's packed particles (pairs.hpp: Body). `packed`: the rows of `body` match
-  // the particles (same order and count) since the last force computation, i.e. no rebuild
-  // since (rebuild() clears it); the step then keeps them current: initialIntegrate writes the
-  // owned bodies and resets the force and torque sums (gravity + fExt) after its half kick.
-  // From the start of a rebuild to the next force computation, which packs every body anew,
-  // their storage is the rebuild's int scratch (rebuildInts).
-  std::vector<detail::Body> body;
-  bool packed = false;
-  /// `count` ints of scratch in the bodies' storage (grown if needed), valid until the next force
-  /// computation; only inside a rebuild (packed is false).
-  int* rebuildInts(std::size_t count);
+  /// Contact and wall forces: the contact laws, the packed bodies and their protocol, the chunk,
+  /// the tally of the last computation (contact_forces.hpp).
+  detail::ContactForces forces;
+  /// Velocity Verlet: the time step and gravity (integrator.hpp).
+  detail::Integrator integrator;
 
   long long rebuilds = 0, steps = 0;
-  // what the last force computation saw (forces.cpp): contacts of owned particles, wall
-  // contacts, the largest overlap (fraction of the smaller radius) and its pair
-  struct ContactTally {
-    long long contacts = 0, walls = 0;
-    double maxOverlap = 0;
-    std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
-  } tally;
 
   // dem.cpp: the step
   void substep();
-  void initialIntegrate();
-  void finalIntegrate();
+  /// The clock after a sub-step (steps, time).
+  void advanceClock();
+  /// f() timed as phase ph.
+  template <class F>
+  decltype(auto) timed(Phase ph, F&& f) {
+    ScopedPhase t(timers, ph);
+    return f();
+  }
   bool decideRebuild();
   void rebuild(bool first);
-  /// The owned positions as the rebuild check's reference (x0), at the end of a rebuild.
-  void keepPositions();
   void checkOverlap(double globalMax);
   std::string where() const;
   std::size_t memory() const;
@@ -149,17 +137,17 @@ struct DemSolver::Impl {
   template <class F>
   void memoryParts(F&& f) const {
     f("fields", detail::columnBytes(p));
-    f("bins", bins.bytes());
-    f("list.rows", detail::cap(list.rowStart));
-    f("list.nbr", detail::cap(list.nbr));
-    f("list.slot", detail::cap(list.slot));
-    f("hist.rows", detail::cap(hist.hStart));
-    f("hist.key_x0", detail::cap(hist.hKey));
-    f("hist.shear", detail::cap(hist.hS));
-    f("hist.free", detail::cap(hist.freeSlots));
+    f("bins", search.bins.bytes());
+    f("search.list.rows", detail::cap(search.list.rowStart));
+    f("search.list.nbr", detail::cap(search.list.nbr));
+    f("search.list.slot", detail::cap(search.list.slot));
+    f("search.hist.rows", detail::cap(search.hist.hStart));
+    f("search.hist.key_x0", detail::cap(search.hist.hKey));
+    f("search.hist.shear", detail::cap(search.hist.hS));
+    f("search.hist.free", detail::cap(search.hist.freeSlots));
     f("ghosts", exchange ? exchange->bytes() : 0);
-    f("scratch", detail::cap(inScr));
-    f("body", detail::cap(body));
+    f("scratch", detail::cap(inScr) + search.scratchBytes());
+    f("body", forces.bodyBytes());
   }
   /// memoryParts as bytes by name (fields by their own names, "field.x" ...).
   Json memoryByPart() const;
@@ -177,19 +165,12 @@ struct DemSolver::Impl {
   void removeOutflow();
   void insertInflow();
   // history.cpp
-  void packHistory();
   /// Owned row i kept as row w (w <= i) while rows before it leave (migration, outflow), its
   /// packed contact histories [h0, h1) moved down to hw on.
   void keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw);
-  // bins.cpp, neighbours.cpp
-  void sortByBin();
-  void buildLists();
   // forces.cpp
-  /// Forces at the current state into f and torque; `stepped`: inside the step, where the owned
-  /// bodies and the reset sums are current when `packed` (initialIntegrate).
+  /// Forces at the current state into f and torque (ContactForces::compute).
   void computeForces(bool update, bool stepped = false);
-  template <Model M, bool Rolling>
-  void forces(bool update, bool stepped);
   // state.cpp
   int ownerRank(const double* x) const;
   void restore(DemState& st);

@@ -7,14 +7,15 @@
 #include <span>
 #include <string>
 
-#include "impl.hpp"
+#include "neighbour_search.hpp"
 
 namespace coloc::dem {
 
 using namespace detail;
 
-void DemSolver::Impl::buildLists() {
+void NeighbourSearch::buildLists(const ParticleStore& p, double skin, const WallMask& wallOn) {
   const std::size_t nAll = p.size(), n = p.nOwned;
+  const int* const perm = scratch_.data();  // sortByBin's
   // every local particle in (bin, id) order (owned clamped into the block, ghosts into the
   // ghost layer; the owned ones are in that order already)
   ensure(bins.binItems, nAll);
@@ -125,3 +126,34 @@ void DemSolver::Impl::buildLists() {
 }
 
 }  // namespace coloc::dem
+
+namespace coloc::dem::detail {
+
+void NeighbourSearch::keepPositions(const ParticleStore& p) {
+  // x0 in the keys' array (history.hpp), which the list build has read for the last time
+  const std::size_t n = p.nOwned;
+  ensure(hist.hKey, 3 * n);
+  hist.hKey.resize(3 * n);
+  for (int d = 0; d < 3; ++d)
+    std::copy_n(p.x[d].begin(), n, hist.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
+}
+
+double NeighbourSearch::maxDisplacement2(const ParticleStore& p) const {
+  double m2 = 0;
+  const std::size_t n = p.nOwned;
+  // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
+  // double first, so a lost particle forces the rebuild)
+  const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
+  const double *X0 = hist.x0(0, n), *Y0 = hist.x0(1, n), *Z0 = hist.x0(2, n);
+  constexpr double kBig = std::numeric_limits<double>::max();
+#pragma omp simd reduction(max : m2)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double dx = X[i] - X0[i], dy = Y[i] - Y0[i], dz = Z[i] - Z0[i];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    const double c = d2 <= kBig ? d2 : kBig;
+    m2 = m2 > c ? m2 : c;
+  }
+  return m2;
+}
+
+}  // namespace coloc::dem::detail

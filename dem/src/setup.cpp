@@ -22,18 +22,19 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     : dec(d), comm(d.comm()), timers(t) {
   ScopedPhase setup(timers, Phase::Setup);
   const auto& grid = dec.grid();
-  dt = cfg.number("particles.dt");
-  model = cfg.string("particles.contact_model") == "linear" ? Model::Linear : Model::HertzMindlin;
+  integrator.dt = cfg.number("particles.dt");
+  forces.law.model =
+      cfg.string("particles.contact_model") == "linear" ? Model::Linear : Model::HertzMindlin;
   const auto grav = cfg.vec3("gravity");
-  for (int k = 0; k < 3; ++k) g[k] = grav[k];
+  for (int k = 0; k < 3; ++k) integrator.g[k] = grav[k];
   overlapLimit = cfg.number("particles.overlap_limit");
   dtFraction = cfg.number("particles.dt_fraction");
-  hist.hStart.assign(1, 0);
+  search.hist.hStart.assign(1, 0);
   readMaterials(cfg);
-  for (const auto& m : mats) rolling = rolling || m.rollingFriction > 0;
+  for (const auto& m : mats) forces.law.rolling = forces.law.rolling || m.rollingFriction > 0;
 
-  const auto info = detail::inspectSources(cfg, grid, nMat);
-  inflow = detail::inspectInflow(cfg, grid, nMat);
+  const auto info = detail::inspectSources(cfg, grid, forces.law.nMat);
+  inflow = detail::inspectInflow(cfg, grid, forces.law.nMat);
   seed = static_cast<std::uint64_t>(cfg.integer("particles.seed"));
   const detail::SourceTotals totals = detail::sourceTotals(info);
   double rmax = totals.rmax;
@@ -56,7 +57,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     if (total == 0 && inflow.empty())
       total = comm.sum(static_cast<long long>(initial->particles.nOwned));
   }
-  if (total > 0 && nMat == 0)
+  if (total > 0 && forces.law.nMat == 0)
     throw ConfigError("particles.materials", "at least one material is required");
   const double dmax = 2 * rmax;
   skin = cfg.number("particles.skin") * dmax;
@@ -76,13 +77,13 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   // then fill them (growing ~23 arrays particle by particle cost a third of a 2M-particle set-up
   // in copies and page faults).
   {
-    const auto ownsX = [this](const double* x) { return bins.owns(x); };
+    const auto ownsX = [this](const double* x) { return search.bins.owns(x); };
     std::size_t count = 0;
-    detail::generate(cfg, info, bins.lo, bins.hi, ownsX,
+    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
                      [&count](const detail::NewParticle&) { ++count; });
     detail::resizeAll(p, count);
-    hist.hStart.assign(count + 1, 0);
-    detail::generate(cfg, info, bins.lo, bins.hi, ownsX,
+    search.hist.hStart.assign(count + 1, 0);
+    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
                      [this](const detail::NewParticle& q) { addParticle(q); });
   }
   checkTimeStep();
@@ -99,22 +100,23 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     ScopedPhase f(timers, Phase::DemForce);
     computeForces(false);
   }
-  checkOverlap(comm.max(tally.maxOverlap));
+  checkOverlap(comm.max(forces.tally().maxOverlap));
 }
 
 void DemSolver::Impl::readMaterials(const Config& cfg) {
   mats = detail::readMaterials(cfg);  // checks.cpp (also `coloc check`)
-  nMat = static_cast<int>(mats.size());
+  ContactLaw& law = forces.law;
+  const int nMat = law.nMat = static_cast<int>(mats.size());
   if (nMat == 0) return;
   const auto wm = cfg.integer("particles.wall_material");
   const double kn = cfg.number("particles.linear.kn");
   const double ktr = cfg.number("particles.linear.kt_ratio");
-  pairC.resize(static_cast<std::size_t>(nMat * nMat));
-  wallC.resize(static_cast<std::size_t>(nMat));
+  law.pair.resize(static_cast<std::size_t>(nMat * nMat));
+  law.wall.resize(static_cast<std::size_t>(nMat));
   for (int a = 0; a < nMat; ++a) {
     for (int b = 0; b < nMat; ++b)
-      pairC[static_cast<std::size_t>(a * nMat + b)] = detail::mix(mats[a], mats[b], kn, ktr);
-    wallC[static_cast<std::size_t>(a)] =
+      law.pair[static_cast<std::size_t>(a * nMat + b)] = detail::mix(mats[a], mats[b], kn, ktr);
+    law.wall[static_cast<std::size_t>(a)] =
         detail::mix(mats[a], mats[static_cast<std::size_t>(wm)], kn, ktr);
   }
 }
@@ -204,14 +206,14 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
   const BinLayout b = dec.isTiled()
                           ? binLayout(cfg, grid, boxLayoutOf(dec).cutPlanes(), dmax, skin, total)
                           : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
-  bins.setup(grid, b, dec.lo(), dec.hi());
+  search.bins.setup(grid, b, dec.lo(), dec.hi());
   // the particle exchange of the layout (exchange.hpp), lent the solver's state
   exchange = detail::makeExchange({.dec = dec,
                                    .comm = comm,
                                    .timers = timers,
                                    .p = p,
-                                   .hist = hist,
-                                   .bins = bins,
+                                   .hist = search.hist,
+                                   .bins = search.bins,
                                    .rc = rc,
                                    .where = [this] { return where(); }},
                                   b);
@@ -256,7 +258,7 @@ CaseParticles caseParticles(const Config& cfg, const GlobalGrid& grid, bool rows
 void DemSolver::Impl::checkTimeStep() {
   // The check of `coloc check` (checks.cpp) on the smallest radius of each material over all
   // ranks: the limit grows with the radius, so this is the smallest limit over the particles.
-  std::vector<double> negMin(static_cast<std::size_t>(nMat),
+  std::vector<double> negMin(static_cast<std::size_t>(forces.law.nMat),
                              -std::numeric_limits<double>::infinity());
   for (std::size_t i = 0; i < p.nOwned; ++i) {
     const auto m = static_cast<std::size_t>(p.material[i]);
@@ -265,8 +267,9 @@ void DemSolver::Impl::checkTimeStep() {
   comm.maxInPlace(std::span<double>(negMin));
   std::vector<double> rMin(negMin.size());
   for (std::size_t m = 0; m < rMin.size(); ++m) rMin[m] = -negMin[m];
-  detail::checkTimeStep(
-      {dt, dtFraction, model, pairC.empty() ? 0.0 : pairC[0].kn, mats, inflow, rMin});
+  detail::checkTimeStep({integrator.dt, dtFraction, forces.law.model,
+                         forces.law.pair.empty() ? 0.0 : forces.law.pair[0].kn, mats, inflow,
+                         rMin});
 }
 
 void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
@@ -285,11 +288,11 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
     p.v[d][i] = q.v[d];
     p.omega[d][i] = p.f[d][i] = p.torque[d][i] = p.fExt[d][i] = 0;
   }
-  if (hist.hStart.size() < n + 1) {
-    ensure(hist.hStart, n + 1);
-    hist.hStart.resize(n + 1);
+  if (search.hist.hStart.size() < n + 1) {
+    ensure(search.hist.hStart, n + 1);
+    search.hist.hStart.resize(n + 1);
   }
-  hist.hStart[n] = hist.hStart[n - 1];
+  search.hist.hStart[n] = search.hist.hStart[n - 1];
 }
 
 }  // namespace coloc::dem

@@ -1,0 +1,84 @@
+// dem/src/contact_forces.hpp — the contact and wall forces of the DEM as a part that owns its
+// state (as LAMMPS's Pair and its wall fix): the contact laws' coefficients, the packed bodies
+// the force loop reads (pairs.hpp: Body) with their protocol flag, the chunk of touching pairs
+// (pairs.hpp: PairChunk), and the tally of the last computation (its output). It works on the
+// particles and the neighbour search its owner passes to each call (ForceInputs).
+//
+// The `packed` protocol: the rows of the bodies match the particles (same order and count) since
+// the last force computation, i.e. no rebuild since (the owner calls unpack() when a rebuild
+// starts); the step then keeps them current: the integration writes the owned bodies and resets
+// the force and torque sums (gravity + fExt) after its half kick, and compute() with `stepped`
+// packs only the ghosts' bodies.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "buffers.hpp"
+#include "coloc/dem/dem.hpp"
+#include "contact.hpp"
+#include "neighbour_search.hpp"
+#include "pairs.hpp"
+
+namespace coloc::dem::detail {
+
+/// What the last force computation saw: contacts of owned particles, wall contacts, the largest
+/// overlap (fraction of the smaller radius) and its pair (partner -1: a wall).
+struct ContactTally {
+  long long contacts = 0, walls = 0;
+  double maxOverlap = 0;
+  std::int64_t maxOverlapId = -1, maxOverlapPartner = 0;
+};
+
+/// The contact laws (set once, setup.cpp): the model, rolling resistance of any material pair,
+/// and the coefficients of every material pair and of every material against the walls.
+struct ContactLaw {
+  Model model = Model::HertzMindlin;
+  bool rolling = false;
+  int nMat = 0;
+  std::vector<PairCoeff> pair;  // [a * nMat + b]
+  std::vector<PairCoeff> wall;  // [a]
+};
+
+/// What a force computation works on, lent by the owner for the call.
+struct ForceInputs {
+  ParticleStore& p;         // f and torque written (owned), the rest read
+  NeighbourSearch& search;  // the list (slots taken and freed), the pool, the bins' box
+  double dt;
+  const double* g;  // gravity, 3
+};
+
+class ContactForces {
+ public:
+  ContactLaw law;
+
+  /// Forces at the current state into f and torque of the owned particles: gravity + fExt +
+  /// contacts + walls; `update`: the shear histories advance; `stepped`: inside the step, where
+  /// the owned bodies and the reset sums are current when packed() (the integration's).
+  void compute(const ForceInputs& in, bool update, bool stepped);
+  /// The bodies match the particles (see above).
+  bool packed() const { return packed_; }
+  /// The packed bodies (index = local particle), written by the integration when packed().
+  Body* bodies() { return body_.data(); }
+  /// The particles change order or count (a rebuild): the next compute() packs every body.
+  void unpack() { packed_ = false; }
+  const ContactTally& tally() const { return tally_; }
+  std::size_t bodyBytes() const { return cap(body_); }
+
+ private:
+  template <Model M, bool Rolling>
+  void run(const ForceInputs& in, bool update, bool stepped);
+  /// The force and torque sums reset to gravity + fExt for the owned particles, and the bodies
+  /// sized for every local particle.
+  void resetSums(const ForceInputs& in);
+  /// The bodies of particles [from, size) packed from the columns.
+  void packBodies(const ParticleStore& p, std::size_t from);
+
+  PairChunk chunk_;
+  std::vector<Body> body_;
+  bool packed_ = false;
+  ContactTally tally_;
+};
+
+}  // namespace coloc::dem::detail

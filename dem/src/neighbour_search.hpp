@@ -1,0 +1,58 @@
+// dem/src/neighbour_search.hpp — the neighbour search of the DEM as a part that owns its state
+// (as LAMMPS's Neighbor): the bins (bins.hpp), the half Verlet list (neighbours.hpp), the
+// contact-history pool (history.hpp) and the rebuild's own int scratch (the (bin, id) re-sort's
+// permutation; the destination codes and row cursors of the history packing). It works on the
+// particles its owner passes to each call; the sequence of a rebuild (pack, migrate, sort,
+// ghosts, lists, keep positions) is the owner's (dem.cpp).
+//   bins.cpp        the counting sort by bin, the (bin, id) re-sort of owned particles
+//   neighbours.cpp  the half Verlet list build (and the history lookup of its entries)
+//   history.cpp     the history packing into rows per owned particle, row compaction
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "bins.hpp"
+#include "buffers.hpp"
+#include "coloc/dem/dem.hpp"
+#include "history.hpp"
+#include "neighbours.hpp"
+
+namespace coloc::dem::detail {
+
+/// The walls of the box, [axis][low, high] (true: a wall there).
+using WallMask = std::array<std::array<bool, 2>, 3>;
+
+class NeighbourSearch {
+ public:
+  Bins bins;
+  NeighbourList list;
+  HistoryPool hist;
+
+  /// The history pool becomes rows per owned particle of `p` (the format migration carries and
+  /// the list build reads), keyed by the partner's global id (walls: -1..-6); `dec`, `nRanks`:
+  /// the owner of each particle (a pair bound for two ranks keeps a row under each).
+  void packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks);
+  /// Owned particles of `p` put in (bin, id) order; the history rows stay in pre-sort order
+  /// (the permutation is kept for buildLists).
+  void sortByBin(ParticleStore& p);
+  /// Every local particle sorted by bin, the half list built (pairs closer than their radii plus
+  /// `skin`; walls of `wallOn` close the rows of owned particles), each entry taking its history
+  /// from the rows; the rows no entry took are free slots.
+  void buildLists(const ParticleStore& p, double skin, const WallMask& wallOn);
+  /// The owned positions as the rebuild check's reference (x0), at the end of a rebuild.
+  void keepPositions(const ParticleStore& p);
+  /// The largest squared displacement of an owned particle since keepPositions (NaN and inf
+  /// become the largest double).
+  double maxDisplacement2(const ParticleStore& p) const;
+  /// Bytes of the rebuild's scratch (capacity).
+  std::size_t scratchBytes() const { return cap(scratch_); }
+
+ private:
+  // sortByBin to the end of buildLists: the (bin, id) re-sort's permutation (scratch_[k]: the
+  // history row of particle k); in packHistory: destination codes, then row cursors
+  std::vector<int> scratch_;
+};
+
+}  // namespace coloc::dem::detail
