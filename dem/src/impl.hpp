@@ -138,13 +138,13 @@ struct DemSolver::Impl {
   void memoryParts(F&& f) const {
     f("fields", detail::columnBytes(p));
     f("bins", search.bins.bytes());
-    f("search.list.rows", detail::cap(search.list.rowStart));
-    f("search.list.nbr", detail::cap(search.list.nbr));
-    f("search.list.slot", detail::cap(search.list.slot));
-    f("search.hist.rows", detail::cap(search.hist.hStart));
-    f("search.hist.key_x0", detail::cap(search.hist.hKey));
-    f("search.hist.shear", detail::cap(search.hist.hS));
-    f("search.hist.free", detail::cap(search.hist.freeSlots));
+    f("list.rows", detail::cap(search.list.rowStart));
+    f("list.nbr", detail::cap(search.list.nbr));
+    f("list.slot", detail::cap(search.list.slot));
+    f("hist.rows", detail::cap(search.hist.hStart));
+    f("hist.key_x0", detail::cap(search.hist.hKey));
+    f("hist.shear", detail::cap(search.hist.hS));
+    f("hist.free", detail::cap(search.hist.freeSlots));
     f("ghosts", exchange ? exchange->bytes() : 0);
     f("scratch", detail::cap(inScr) + search.scratchBytes());
     f("body", forces.bodyBytes());
