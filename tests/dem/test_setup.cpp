@@ -2,6 +2,7 @@
 // naming the cause, with no hang. Also DummyDEM (setFrozen) and the time-step limit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -187,3 +188,30 @@ TEST(DemSetup, FrozenParticlesDoNotMove) {
 }
 
 }  // namespace
+
+// report.json's particles.bytes_by_part: the names researchers plot (stable across refactors:
+// they name what the storage holds, not which class owns it), and the parts add up to
+// particles.bytes_per_particle.
+TEST(DemMemory, PartsKeepTheirNamesAndAddUp) {
+  demtest::Case c(caseText(
+      kMat +
+      R"(, "dt": 1e-5, "sources": [{"type": "random", "lo": [0, 0, 0], "hi": [0.1, 0.1, 0.05],
+          "count": 400, "radius": 0.002}])"));
+  for (int s = 0; s < 5; ++s) c.dem->substep();
+  const auto d = c.dem->diagnostics();
+  ASSERT_TRUE(d.contains("bytes_by_part"));
+  std::vector<std::string> names;
+  double sum = 0;
+  for (const auto& [k, v] : d["bytes_by_part"].items()) {
+    names.push_back(k);
+    sum += v.get<double>();
+  }
+  for (const char* want :
+       {"field.x", "field.v", "bins", "list.rows", "list.nbr", "list.slot", "hist.rows",
+        "hist.key_x0", "hist.shear", "hist.free", "ghosts", "scratch", "body"})
+    EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
+  for (const auto& n : names)
+    EXPECT_TRUE(n.rfind("field.", 0) == 0 || n.find('.') == n.rfind('.')) << n;
+  EXPECT_NEAR(sum, d["bytes_per_particle"].get<double>(),
+              1e-9 * d["bytes_per_particle"].get<double>());
+}
