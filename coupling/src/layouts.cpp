@@ -47,13 +47,6 @@ Blocks unpackBlocks(const std::vector<int>& in, std::size_t& q) {
   return b;
 }
 
-BoxLayout boxesOf(const GlobalGrid& g, const Blocks& b) {
-  BoxLayout l;
-  l.grid = g;
-  for (int r = 0; r < b.size(); ++r) l.box.push_back({b.lo(r), b.hi(r)});
-  return l;
-}
-
 }  // namespace
 
 StrategyLayout layoutOnRoot(const Comm& comm, const GlobalGrid& grid,
@@ -92,16 +85,12 @@ StrategyLayout layoutOnRoot(const Comm& comm, const GlobalGrid& grid,
   comm.broadcast(std::span<int>(packed));
   comm.broadcast(std::span<double>(num, 4));
   if (comm.isRoot()) return l;
-  l.modelledImbalance = num[0];
-  l.uniformImbalance = num[1];
-  l.maxCost = num[2];
-  l.meanCost = num[3];
   std::size_t q = 2;
   if (packed.at(0) == 1) {
-    l.fluidBlocks = unpackBlocks(packed, q);
-    l.fluid = boxesOf(grid, *l.fluidBlocks);
-    if (packed.at(1) == 1) l.particleBlocks = unpackBlocks(packed, q);
-    l.particles = l.particleBlocks ? boxesOf(grid, *l.particleBlocks) : l.fluid;
+    const Blocks fluid = unpackBlocks(packed, q);
+    std::optional<Blocks> particles;
+    if (packed.at(1) == 1) particles = unpackBlocks(packed, q);
+    l = blocksLayout(grid, fluid, particles);
   } else {
     l.fluid.grid = grid;
     l.fluid.box.resize((packed.size() - 2) / 6);
@@ -111,6 +100,10 @@ StrategyLayout layoutOnRoot(const Comm& comm, const GlobalGrid& grid,
     }
     l.particles = l.fluid;
   }
+  l.modelledImbalance = num[0];
+  l.uniformImbalance = num[1];
+  l.maxCost = num[2];
+  l.meanCost = num[3];
   return l;
 }
 

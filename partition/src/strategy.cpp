@@ -64,8 +64,6 @@ StrategyLayout layoutOf(const Decomposition& dec) {
   return l;
 }
 
-namespace {
-
 BoxLayout boxesOf(const GlobalGrid& g, const Blocks& b) {
   BoxLayout l;
   l.grid = g;
@@ -73,9 +71,8 @@ BoxLayout boxesOf(const GlobalGrid& g, const Blocks& b) {
   return l;
 }
 
-/// A process-grid layout of `fluid` blocks (and the particles' own, when given).
 StrategyLayout blocksLayout(const GlobalGrid& g, const Blocks& fluid,
-                            const std::optional<Blocks>& particles = std::nullopt) {
+                            const std::optional<Blocks>& particles) {
   StrategyLayout l;
   l.fluid = boxesOf(g, fluid);
   l.particles = particles ? boxesOf(g, *particles) : l.fluid;
@@ -83,6 +80,8 @@ StrategyLayout blocksLayout(const GlobalGrid& g, const Blocks& fluid,
   l.particleBlocks = particles;
   return l;
 }
+
+namespace {
 
 /// A process grid's blocks measured under `cost`: the balancer's largest and mean block cost.
 BalancedLayout measured(const GlobalGrid& g, const std::vector<double>& cost, const Blocks& b) {
@@ -267,8 +266,7 @@ TiledLayout tiledStrategy(const StrategyInput& in, const std::vector<double>& co
         balanceBlocks(in.grid, cost, in.ranks, opt.minCells, opt.granularity, in.dims);
     const Blocks b{sep.dims, sep.cuts};
     TiledLayout t;
-    t.layout.grid = in.grid;
-    for (int r = 0; r < in.ranks; ++r) t.layout.box.push_back({b.lo(r), b.hi(r)});
+    t.layout = boxesOf(in.grid, b);
     evaluateBoxes(cost, opt, t);
     // as tiledBoxes chooses among its own layouts: cheapest largest box, within 0.1 % fewest
     // halo cells

@@ -85,6 +85,12 @@ struct StrategyLayout {
   bool isGrid() const { return fluidBlocks.has_value(); }
 };
 
+/// The boxes of a process grid's blocks (rank r: [b.lo(r), b.hi(r))).
+BoxLayout boxesOf(const GlobalGrid& g, const Blocks& b);
+/// A process-grid layout of `fluid` blocks, and of the particles' own blocks when given; costs
+/// unset.
+StrategyLayout blocksLayout(const GlobalGrid& g, const Blocks& fluid,
+                            const std::optional<Blocks>& particles = std::nullopt);
 /// The layout of a live decomposition (its blocks too, when it has a process grid); costs unset.
 StrategyLayout layoutOf(const Decomposition& dec);
 
