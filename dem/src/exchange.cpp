@@ -11,18 +11,9 @@
 
 namespace coloc::dem::detail {
 
-int crossAxis(ParticleStore& p, const Bins& bins, std::size_t i, int d, std::string& err,
-              const std::function<std::string()>& where) {
+int crossAxis(ParticleStore& p, const Bins& bins, std::size_t i, int d) {
   double& x = p.x[d][i];
-  if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i])) {
-    if (err.empty())
-      err = "particle " + std::to_string(p.id[i]) + " has a non-finite " +
-            (!std::isfinite(x)           ? "position"
-             : !std::isfinite(p.v[d][i]) ? "velocity"
-                                         : "angular velocity") +
-            where() + ": the run blew up (time step too large, or a NaN in the forces)";
-    return kLost;
-  }
+  if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i])) return kLost;
   if (bins.periodic[d]) {
     const double top = bins.origin[d] + bins.L[d];
     if (x < bins.origin[d]) {
@@ -36,15 +27,25 @@ int crossAxis(ParticleStore& p, const Bins& bins, std::size_t i, int d, std::str
       return +1;
     }
   } else if (x < bins.origin[d] || x > bins.origin[d] + bins.L[d]) {
-    if (err.empty())
-      err = "particle " + std::to_string(p.id[i]) + " left the box through the " +
-            (x < bins.origin[d] ? "low " : "high ") + kAxis[d] + " face" + where() +
-            " (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
-            "): too fast for the walls, or walls are off";
     return kLost;
   }
   const long long b = bins.gbinClamped(x, d);
   return b < bins.binLo[d] ? -1 : (b >= bins.binHi[d] ? +1 : 0);
+}
+
+std::string lostMessage(const ParticleStore& p, const Bins& bins, std::size_t i, int d,
+                        const std::string& where) {
+  const double x = p.x[d][i];
+  if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i]))
+    return "particle " + std::to_string(p.id[i]) + " has a non-finite " +
+           (!std::isfinite(x)           ? "position"
+            : !std::isfinite(p.v[d][i]) ? "velocity"
+                                        : "angular velocity") +
+           where + ": the run blew up (time step too large, or a NaN in the forces)";
+  return "particle " + std::to_string(p.id[i]) + " left the box through the " +
+         (x < bins.origin[d] ? "low " : "high ") + kAxis[d] + " face" + where +
+         " (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
+         "): too fast for the walls, or walls are off";
 }
 
 void ParticleExchange::packMigrant(std::size_t i, std::size_t W, std::span<double> out) const {

@@ -42,11 +42,14 @@ struct ExchangeContext {
 
 /// Migration along axis d of owned particle i: wraps its position across a periodic face,
 /// returns -1 / +1 when it leaves the block through the low / high face along d, else 0;
-/// kLost (and the first such message in err, ending with where()) for a non-finite particle or
-/// one beyond a wall.
+/// kLost for a non-finite particle or one beyond a wall (lostMessage says which; the particle
+/// is left as it was).
 inline constexpr int kLost = 2;
-int crossAxis(ParticleStore& p, const Bins& bins, std::size_t i, int d, std::string& err,
-              const std::function<std::string()>& where);
+int crossAxis(ParticleStore& p, const Bins& bins, std::size_t i, int d);
+/// Why crossAxis found particle i lost along d: the message of the error, `where` (rank, step,
+/// time) in it.
+std::string lostMessage(const ParticleStore& p, const Bins& bins, std::size_t i, int d,
+                        const std::string& where);
 
 class ParticleExchange {
  public:
@@ -71,8 +74,22 @@ class ParticleExchange {
   explicit ParticleExchange(const ExchangeContext& c) : c_(c) {}
 
   static constexpr int kLost = detail::kLost;
-  int crossAxis(std::size_t i, int d, std::string& err) {
-    return detail::crossAxis(c_.p, c_.bins, i, d, err, c_.where);
+  /// crossAxis on the lent particles; the first loss of the migration noted (fail).
+  int crossAxis(std::size_t i, int d) {
+    const int dir = detail::crossAxis(c_.p, c_.bins, i, d);
+    if (dir == kLost) fail([&] { return detail::lostMessage(c_.p, c_.bins, i, d, c_.where()); });
+    return dir;
+  }
+  /// Notes the first failure of a migration (the message made only then); raiseFailure() at the
+  /// migration's end raises it on every rank (collective) and clears it.
+  template <class Message>
+  void fail(Message&& message) {
+    if (failure_.empty()) failure_ = message();
+  }
+  void raiseFailure() {
+    std::string f;
+    f.swap(failure_);
+    c_.comm.raiseIfAny(f);
   }
   /// A migrant's row: the field table's kOpMigrate row (W doubles), its history count, then
   /// (partner id, shear 3) per history.
@@ -89,8 +106,9 @@ class ParticleExchange {
   }
 
   ExchangeContext c_;
-  std::vector<double> rbuf_;                // imports of one exchange
-  CommPlan mig_;                            // migration (items: the doubles of the packed rows)
+  std::string failure_;       // the first failure of the migration under way (empty: none)
+  std::vector<double> rbuf_;  // imports of one exchange
+  CommPlan mig_;              // migration (items: the doubles of the packed rows)
   std::vector<int> rank_, index_, counts_;  // scratch of the plan builds
 };
 

@@ -91,7 +91,6 @@ std::size_t GridExchange::importSegments(const CommPlan& plan, const Axis& ax,
 
 void GridExchange::migrate() {
   ParticleStore& p = c_.p;
-  std::string err;
   p.nGhost = 0;
   resizeAll(p, p.nOwned);
   // a migrating particle: its row of the field table (kOpMigrate), its history count, then
@@ -104,7 +103,7 @@ void GridExchange::migrate() {
     std::size_t w = 0;
     int hw = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      int dir = crossAxis(i, d, err);
+      int dir = crossAxis(i, d);
       if (dir == kLost) dir = 0;
       const std::size_t s = dir > 0 ? 1 : 0;
       if (dir != 0 && ax.to[s] == MPI_PROC_NULL) dir = 0;  // cannot happen
@@ -142,7 +141,7 @@ void GridExchange::migrate() {
     const std::span<const double> in(rbuf_);
     for (std::size_t g = 0; g < ns; ++g) unpackMigrants(in.subspan(seg[g].from, seg[g].count), W);
   }
-  c_.comm.raiseIfAny(err);
+  raiseFailure();
 }
 
 PlanTraffic GridExchange::forwardRows(Axis& ax, int d, unsigned op, std::size_t W) {

@@ -110,7 +110,6 @@ TiledExchange::TiledExchange(const ExchangeContext& c, const BinLayout& b) : Par
 void TiledExchange::migrate() {
   ParticleStore& p = c_.p;
   const Bins& bins = c_.bins;
-  std::string err;
   p.nGhost = 0;
   resizeAll(p, p.nOwned);
   const std::size_t W = rowWidth(p, kOpMigrate);
@@ -124,15 +123,16 @@ void TiledExchange::migrate() {
   counts_.assign(size, 0);
   for (std::size_t i = 0; i < n; ++i) {
     bool lost = false;
-    for (int d = 0; d < 3; ++d) lost = crossAxis(i, d, err) == kLost || lost;
+    for (int d = 0; d < 3; ++d) lost = crossAxis(i, d) == kLost || lost;
     const double x[3] = {p.x[0][i], p.x[1][i], p.x[2][i]};
     int to = lost || bins.owns(x) ? me : bins.ownerRank(c_.dec, x);
     if (to != me && !std::binary_search(near_.begin(), near_.end(), to)) {
-      if (err.empty())
-        err = "particle " + std::to_string(p.id[i]) + " moved beyond the boxes next to rank " +
-              std::to_string(me) + "'s between two neighbour rebuilds" + c_.where() +
-              " (x = " + fmt(x[0]) + ", " + fmt(x[1]) + ", " + fmt(x[2]) +
-              "): the run blew up (time step too large, or a NaN in the forces)";
+      fail([&] {
+        return "particle " + std::to_string(p.id[i]) + " moved beyond the boxes next to rank " +
+               std::to_string(me) + "'s between two neighbour rebuilds" + c_.where() +
+               " (x = " + fmt(x[0]) + ", " + fmt(x[1]) + ", " + fmt(x[2]) +
+               "): the run blew up (time step too large, or a NaN in the forces)";
+      });
       to = me;
     }
     dest_[i] = to;
@@ -165,7 +165,7 @@ void TiledExchange::migrate() {
   book(c_.timers, t, countMessages(), c_.comm.wtime() - t0, Traffic::DemMigrate);
   // arrivals by source rank, ascending, each in its source's row order
   unpackMigrants(rbuf_, W);
-  c_.comm.raiseIfAny(err);
+  raiseFailure();
 }
 
 PlanTraffic TiledExchange::forwardRows(unsigned op, std::size_t W) {

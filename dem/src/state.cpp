@@ -303,7 +303,8 @@ void DemSolver::Impl::restore(DemState& st) {
     // where it is now must be a place a step could have left it: inside the walls (a periodic
     // axis wraps at the next rebuild)
     for (int d = 0; d < 3 && err.empty(); ++d)
-      if (!search.bins.periodic[d]) (void)detail::crossAxis(p, search.bins, i, d, err, at);
+      if (!search.bins.periodic[d] && detail::crossAxis(p, search.bins, i, d) == detail::kLost)
+        err = detail::lostMessage(p, search.bins, i, d, at());
   }
   comm.raiseIfAny(err);
   if (withX0) {  // the ghosts to where their owners are now
