@@ -281,6 +281,43 @@ TEST(DemHeat, RestoreContinuesTemperaturesBitForBit) {
   EXPECT_EQ(differ2, 0);
 }
 
+TEST(DemHeat, RebalanceOntoTiledBoxesKeepsTemperatures) {
+  // the state of a process-grid run restored onto tiled boxes (an in-memory re-balance): every
+  // temperature arrives unchanged, and the two runs continue together to round-off
+  const std::string text = bedCase(350);
+  Case a(text);
+  for (int s = 0; s < 200; ++s) a.dem->substep();
+  const coloc::GlobalGrid g = coloc::gridFromConfig(a.cfg);
+  coloc::TiledOptions opt;
+  opt.granularity = 2;
+  const auto cost = coloc::test::heapedCost(g, {2, g.cells[1], 2}, 20.0);
+  const coloc::Decomposition boxes =
+      coloc::decompositionOf(a.dec.comm(), coloc::tiledBoxes(g, cost, a.dec.size(), opt).layout);
+  coloc::Timers timers;
+  coloc::dem::DemSolver b(boxes, a.cfg, timers, a.dem->saveState());
+  const auto tb = [&] {
+    std::vector<double> t(static_cast<std::size_t>(kBedN), 0.0);
+    const auto& T = b.particles().field("temperature");
+    for (std::size_t i = 0; i < b.particles().nOwned; ++i)
+      t[static_cast<std::size_t>(b.particles().id[i])] = T[i];
+    a.dec.comm().sumInPlace(std::span<double>(t));
+    return t;
+  };
+  EXPECT_EQ(tb(), temperatures(a, kBedN));
+  for (int s = 0; s < 200; ++s) {
+    a.dem->substep();
+    b.substep();
+  }
+  const auto t1 = tb(), t0 = temperatures(a, kBedN);
+  double d = 0;
+  for (long k = 0; k < kBedN; ++k)
+    d = std::max(d, std::fabs(t1[static_cast<std::size_t>(k)] - t0[static_cast<std::size_t>(k)]));
+  if (a.dec.comm().isRoot())
+    std::printf("re-balance onto tiled boxes, %d ranks: max |dT|/100 K after 200 steps %.3e\n",
+                a.dec.size(), d / 100);
+  EXPECT_LT(d / 100, 1e-10);
+}
+
 TEST(DemHeat, OffMeansNoFields) {
   const std::string on = bedCase(0);
   std::string off = on;
