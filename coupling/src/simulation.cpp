@@ -492,8 +492,16 @@ void Simulation::writeOutput(OutputWriter& out) {
     const std::size_t n = p.nOwned;
     // The fluid's force as the DEM integrates it (f_ext, held over the sub-steps; zero without
     // a fluid) and the material: the drag-force field CFD-DEM users look for in ParaView.
-    const ParticleExtraColumns extra{true, std::span<const int>(p.material.data(), n),
-                                     firstRows(p.fExt, n)};
+    ParticleExtraColumns extra;
+    extra.write = true;
+    extra.material = std::span<const int>(p.material.data(), n);
+    extra.fluidForce = firstRows(p.fExt, n);
+    // particles.heat: the temperature field of the table (the same on every rank)
+    for (const auto& e : p.extra)
+      if (e.name == "temperature") {
+        extra.temperature = true;
+        extra.temperatureK = std::span<const double>(e.data[0].data(), n);
+      }
     out.writeParticles(run_.steps, run_.time, std::span<const std::int64_t>(p.id.data(), n),
                        firstRows(p.x, n), firstRows(p.v, n), firstRows(p.omega, n),
                        std::span<const double>(p.radius.data(), n), extra);

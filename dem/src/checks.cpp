@@ -25,6 +25,17 @@ std::vector<Material> readMaterials(const Config& cfg) {
     mt.restitution = m["restitution"].get<double>();
     mt.friction = m["friction"].get<double>();
     mt.rollingFriction = m["rolling_friction"].get<double>();
+    mt.heatCapacity = m["heat_capacity"].get<double>();
+    mt.conductivity = m["conductivity"].get<double>();
+    if (cfg.boolean("particles.heat")) {
+      const std::string key = "particles.materials[" + std::to_string(mats.size()) + "]";
+      if (!(mt.heatCapacity > 0))
+        throw ConfigError(key + ".heat_capacity",
+                          "required (> 0, J/(kg K)) when particles.heat is true");
+      if (!(mt.conductivity > 0))
+        throw ConfigError(key + ".conductivity",
+                          "required (> 0, W/(m K)) when particles.heat is true");
+    }
     mats.push_back(mt);
   }
   const auto n = static_cast<long long>(mats.size());

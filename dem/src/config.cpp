@@ -14,6 +14,9 @@ Schema commonSource() {
            "each velocity component gets a uniform random addition in [-spread, spread] (m/s), "
            "drawn from the particle's id",
            Range::nonNegative());
+  s.number("temperature", 293.15,
+           "initial temperature of the source's particles (K); used when particles.heat is true",
+           Range::positive());
   return s;
 }
 
@@ -76,9 +79,27 @@ void declareConfig(Schema& s) {
     m.number("rolling_friction", 0.0,
              "rolling resistance coefficient (constant directional torque); 0: off",
              Range::nonNegative());
+    m.number("heat_capacity", 0.0,
+             "specific heat capacity c_p (J/(kg K)); required (> 0) when particles.heat is true",
+             Range::nonNegative());
+    m.number("conductivity", 0.0,
+             "thermal conductivity k (W/(m K)) for contact conduction; required (> 0) when "
+             "particles.heat is true",
+             Range::nonNegative());
     s.list("particles.materials", {{"", m}},
            "materials: [{density, young, poisson, restitution, friction, rolling_friction}]");
   }
+  s.boolean("particles.heat", false,
+            "particle temperature (lumped capacitance, per-material heat_capacity and "
+            "conductivity, per-source temperature) and conduction through contacts; false: no "
+            "temperature at all (nothing computed, stored or sent)");
+  s.boolean("particles.contact_conduction", true,
+            "with particles.heat: heat conducted through particle-particle and particle-wall "
+            "contacts (Batchelor & O'Brien: H = 2 k_eff a, a the Hertz contact radius)");
+  s.number("particles.wall_temperature", 0.0,
+           "with particles.heat: temperature of every wall (K), which conducts through its "
+           "contacts with the wall_material's conductivity; 0: adiabatic walls",
+           Range::nonNegative());
   s.integer("particles.wall_material", 0, "material of the box walls", Range::nonNegative());
   s.boolean("particles.walls", true,
             "planar walls on every non-periodic face of the box whose particles.boundary is auto");

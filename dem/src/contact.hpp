@@ -31,6 +31,7 @@ namespace coloc::dem::detail {
 struct Material {
   double density = 2500, young = 1e7, poisson = 0.3, restitution = 0.9, friction = 0.5,
          rollingFriction = 0.0;
+  double heatCapacity = 0, conductivity = 0;  // J/(kg K), W/(m K); 0: not given (particles.heat)
 };
 
 enum class Model { HertzMindlin, Linear };

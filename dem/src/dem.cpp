@@ -55,7 +55,10 @@ void DemSolver::Impl::substep() {
   else
     timed(Phase::DemGhost, [&] { exchange->updateGhosts(); });
   timed(Phase::DemForce, [&] { computeForces(true, true); });
-  timed(Phase::DemIntegrate, [&] { integrator.finalIntegrate(p); });
+  timed(Phase::DemIntegrate, [&] {
+    integrator.finalIntegrate(p);
+    if (heat.on) heat.integrate(p, integrator.dt);
+  });
   advanceClock();
 }
 
@@ -269,6 +272,30 @@ Json DemSolver::diagnostics() const {
   j["inflow_waiting"] = waiting;
   const double scale = f.massInitial + f.massIn;
   j["mass_balance"] = scale > 0 ? std::abs(scale - f.massOut - held) / scale : 0.0;
+  if (m.heat.on) {
+    // energy accounts (J): enthalpy held = enthalpy at the start + wall_heat_in + ext_heat_in +
+    // inflow_enthalpy_in - outflow_enthalpy_out (the coupling's energy balance reads them)
+    const auto& h = m.heat;
+    const auto& T = m.p.extra[h.iT].data[0];
+    double loc[4] = {0, h.wallHeat, h.extHeat, h.outflowEnthalpy};
+    double tMin = std::numeric_limits<double>::infinity(), tMax = -tMin;
+    for (std::size_t i = 0; i < m.p.nOwned; ++i) {
+      loc[0] += h.enthalpy(m.p, i);
+      tMin = std::min(tMin, T[i]);
+      tMax = std::max(tMax, T[i]);
+    }
+    m.comm.sumInPlace(std::span<double>(loc, 4));
+    Json hj;
+    hj["enthalpy"] = loc[0];
+    hj["wall_heat_in"] = loc[1];
+    hj["ext_heat_in"] = loc[2];
+    hj["inflow_enthalpy_in"] = h.inflowEnthalpy;
+    hj["outflow_enthalpy_out"] = loc[3];
+    hj["temperature_min"] = m.comm.min(tMin);
+    hj["temperature_max"] = m.comm.max(tMax);
+    hj["wall_temperature"] = h.wallT;
+    j["heat"] = hj;
+  }
   return j;
 }
 

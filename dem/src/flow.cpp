@@ -51,6 +51,7 @@ void DemSolver::Impl::removeOutflow() {
     if (beyondOutflow(i, &fc)) {
       ++flow.countOut;
       flow.massOut += p.mass[i];
+      if (heat.on) heat.outflowEnthalpy += heat.enthalpy(p, i);
       ++flow.countOutByFace[static_cast<std::size_t>(fc)];
       continue;
     }
@@ -109,6 +110,7 @@ void DemSolver::Impl::insertInflow() {
            static_cast<long long>(n);
     const auto uid = static_cast<std::uint64_t>(q.id);
     q.material = f.material;
+    q.temperature = f.temperature;
     q.radius = f.size.radius(detail::uniform01(seed, uid, 1));
     const long long ij[2] = {site % f.na, site / f.na};
     const int ab[2] = {f.a, f.b};
@@ -174,6 +176,9 @@ void DemSolver::Impl::insertInflow() {
       }
       candidate(n, j, q);
       flow.massIn += massOf(q.material, q.radius);
+      if (heat.on)
+        heat.inflowEnthalpy += massOf(q.material, q.radius) *
+                               heat.cp[static_cast<std::size_t>(q.material)] * q.temperature;
       ++flow.inserted[n];
       ++flow.countIn;
       forceRebuild = true;

@@ -304,6 +304,7 @@ void ContactForces::run(const ForceInputs& in, bool update, bool stepped) {
 
 void DemSolver::Impl::computeForces(bool update, bool stepped) {
   forces.compute({p, search, integrator.dt, integrator.g}, update, stepped);
+  if (heat.on) heat.conduct(p, search);  // a pass of its own: the force pass is unchanged
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -219,6 +219,7 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
     if (f.end > 0 && !(f.end > f.start)) throw ConfigError(key + ".end", "must be after start");
     f.v = vec(src["velocity"]);
     f.spread = src["velocity_spread"].get<double>();
+    f.temperature = src["temperature"].get<double>();
     const int ab[2] = {f.a, f.b};
     const auto& pmin = src["patch"]["min"];
     const auto& pmax = src["patch"]["max"];
@@ -340,7 +341,9 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
     const std::string type = src["type"].get<std::string>();
     const int mat = static_cast<int>(src["material"].get<long long>());
     const Velocity velocity(src);
+    const double temperature = src["temperature"].get<double>();
     const auto put = [&](NewParticle& p) {
+      p.temperature = temperature;
       if (owns(p.x)) add(p);
     };
     if (type == "list") {

@@ -26,6 +26,7 @@ struct NewParticle {
   double radius = 0;
   double x[3] = {0, 0, 0};
   double v[3] = {0, 0, 0};
+  double temperature = 0;  // K (the source's; used with particles.heat)
 };
 
 /// A size distribution (by number, in diameter), drawn per particle from one uniform number of
@@ -67,6 +68,7 @@ struct InflowInfo {
   SizeDist size;
   std::array<double, 3> v{};
   double spread = 0;
+  double temperature = 0;  // K
 };
 
 /// Checks particles.inflow against the box, its periodic axes and the materials (ConfigError

@@ -16,6 +16,7 @@
 //   integrator.cpp Integrator (integrator.hpp): velocity Verlet, the half kicks and the drift
 //   forces.cpp     ContactForces (contact_forces.hpp): contact and wall forces (the pair law on a
 //                  chunk: pairs.hpp), the tally; contact energy
+//   heat.cpp       HeatTransfer (heat.hpp): particle temperature, contact conduction
 //   state.cpp      save/restore (checkpoints, re-balancing)
 #pragma once
 
@@ -33,6 +34,7 @@
 #include "contact_forces.hpp"
 #include "exchange.hpp"
 #include "generate.hpp"
+#include "heat.hpp"
 #include "history.hpp"
 #include "integrator.hpp"
 #include "neighbour_search.hpp"
@@ -114,6 +116,8 @@ struct DemSolver::Impl {
   detail::ContactForces forces;
   /// Velocity Verlet: the time step and gravity (integrator.hpp).
   detail::Integrator integrator;
+  /// Particle temperature and contact conduction (heat.hpp); off: no fields, no pass.
+  detail::HeatTransfer heat;
 
   long long rebuilds = 0, steps = 0;
 

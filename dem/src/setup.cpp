@@ -31,6 +31,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   dtFraction = cfg.number("particles.dt_fraction");
   search.hist.hStart.assign(1, 0);
   readMaterials(cfg);
+  heat.setup(cfg, mats, p);  // registers the temperature fields when particles.heat is on
   for (const auto& m : mats) forces.law.rolling = forces.law.rolling || m.rollingFriction > 0;
 
   const auto info = detail::inspectSources(cfg, grid, forces.law.nMat);
@@ -270,6 +271,13 @@ void DemSolver::Impl::checkTimeStep() {
   detail::checkTimeStep({integrator.dt, dtFraction, forces.law.model,
                          forces.law.pair.empty() ? 0.0 : forces.law.pair[0].kn, mats, inflow,
                          rMin});
+  if (heat.on) {
+    for (const auto& f : inflow) {
+      auto& r = rMin[static_cast<std::size_t>(f.material)];
+      r = std::min(r, f.size.rmin());
+    }
+    heat.checkTimeStep(integrator.dt, overlapLimit, mats, rMin);
+  }
 }
 
 void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
@@ -279,6 +287,7 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
   p.nOwned = n;
   for (auto& e : p.extra)
     for (auto& c : e.data) c[i] = 0;
+  if (heat.on) p.extra[heat.iT].data[0][i] = q.temperature;
   p.id[i] = q.id;
   p.material[i] = q.material;
   p.radius[i] = q.radius;

@@ -166,6 +166,8 @@ std::string OutputWriter::writeParticles(long long step, double time,
     for (const auto& c : extra.fluidForce)
       if (c.size() != n) err = "particle output: arrays of different lengths";
   }
+  if (extra.temperature && extra.temperatureK.size() != n)
+    err = "particle output: arrays of different lengths";
   dec.comm().raiseIfAny(err);
   ensureDir();
   const std::string name = fileName("particles", step);
@@ -193,6 +195,10 @@ std::string OutputWriter::writeParticles(long long step, double time,
       writeParticleVec3(file, "/fluid_force", extra.fluidForce);
       file.setAttribute("/material", "units", "1");
       file.setAttribute("/fluid_force", "units", "N");
+    }
+    if (extra.temperature) {
+      writeParticleArray(file, "/temperature", extra.temperatureK);
+      file.setAttribute("/temperature", "units", "K");
     }
     const std::vector<int> rank(n, dec.rank());
     writeParticleArray(file, "/rank", std::span<const int>(rank));
@@ -222,6 +228,7 @@ std::string OutputWriter::writeParticles(long long step, double time,
     entry.attributes.push_back({"material", false, "/material", "Int", 4});
     entry.attributes.push_back({"fluid_force", true, "/fluid_force"});
   }
+  if (extra.temperature) entry.attributes.push_back({"temperature", false, "/temperature"});
   particleSeries_.add(std::move(entry));
   particleSeries_.write(dec.comm(), (std::filesystem::path(opt_.dir) / "particles.xmf").string());
   return path;

@@ -501,13 +501,16 @@ TEST(H5Io, OutputWriterSeries) {
   const std::vector<int> mat(static_cast<std::size_t>(n), 1 + w.rank());
   std::array<std::vector<double>, 3> ff;
   for (int d = 0; d < 3; ++d) ff[d].assign(static_cast<std::size_t>(n), 1e-6 * (d + 1));
+  const std::vector<double> tempK(static_cast<std::size_t>(n), 300.0 + w.rank());
   for (long long step : {0, 5}) {
     const auto fp = out.writeFields(
         step, 0.01 * static_cast<double>(step),
         {OutputField::scalar("p", p, "m^2/s^2"), OutputField::vector("u", u, "m/s")});
     EXPECT_EQ(fp, opt.dir + "/fields_00000" + std::to_string(step) + ".h5");
     // the optional columns: material and the fluid's force (at step 5 only)
-    const ParticleExtraColumns extra{step == 5, mat, firstRows(ff, ids.size())};
+    ParticleExtraColumns extra{step == 5, mat, firstRows(ff, ids.size())};
+    extra.temperature = step == 5;  // particles.heat's temperature (K)
+    extra.temperatureK = tempK;
     out.writeParticles(step, 0.01 * static_cast<double>(step), ids, firstRows(x, ids.size()),
                        firstRows(x, ids.size()), firstRows(x, ids.size()), r, extra);
   }
@@ -559,18 +562,24 @@ TEST(H5Io, OutputWriterSeries) {
     const auto f = readParticleVec3(pf, "/fluid_force", rows);
     for (int d = 0; d < 3; ++d)
       for (double v : f[d]) EXPECT_EQ(v, 1e-6 * (d + 1));
+    const auto tk = readParticleArray<double>(pf, "/temperature", rows);
+    ASSERT_EQ(tk.size(), static_cast<std::size_t>(n));
+    for (double v : tk) EXPECT_EQ(v, 300.0 + w.rank());
+    EXPECT_EQ(pf.attributeString("/temperature", "units"), "K");
   }
   {
     // step 0 was written without them: its file has no such datasets
     H5File p0 = H5File::openRead(w, opt.dir + "/particles_000000.h5");
     EXPECT_FALSE(p0.exists("/fluid_force"));
     EXPECT_FALSE(p0.exists("/material"));
+    EXPECT_FALSE(p0.exists("/temperature"));
   }
   if (w.rank() == 0) {
     std::ifstream xmf(opt.dir + "/particles.xmf");
     const std::string text((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
     EXPECT_NE(text.find("Name=\"fluid_force\""), std::string::npos);
     EXPECT_NE(text.find("Name=\"material\""), std::string::npos);
+    EXPECT_NE(text.find("Name=\"temperature\""), std::string::npos);
   }
   // disabled series write nothing
   OutputWriter off(dec, OutputOptions{0, false, false, scratch("never")});

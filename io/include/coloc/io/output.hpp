@@ -70,6 +70,10 @@ struct ParticleExtraColumns {
   bool write = false;
   std::span<const int> material;  ///< material index of each particle (`particles.materials`)
   Vec3Span fluidForce;            ///< the fluid's force on each particle (N), as the DEM used it
+  /// With `temperature` true (the same on every rank): /temperature, the particle temperature (K)
+  /// of particles.heat.
+  bool temperature = false;
+  std::span<const double> temperatureK{};
 };
 
 /// Writes the output series of a run. Collective calls (every rank of the decomposition); the
@@ -96,7 +100,8 @@ class OutputWriter {
   /// DIR/particles_NNNNNN.h5 with the owning rank and the vertex list (/vertex: the row index,
   /// the XDMF topology's connectivity), and rewrites DIR/particles.xmf; returns the
   /// .h5 path. Does nothing (returns "") when options().particles is false.
-  /// With `extra.write` (the same on every rank), also /material and /fluid_force.
+  /// With `extra.write` (the same on every rank), also /material and /fluid_force; with
+  /// `extra.temperature` also /temperature.
   std::string writeParticles(long long step, double time, std::span<const std::int64_t> id,
                              Vec3Span x, Vec3Span v, Vec3Span omega, std::span<const double> radius,
                              const ParticleExtraColumns& extra = {});

@@ -1,0 +1,65 @@
+// dem/src/heat.hpp — particle temperature (particles.heat) as a part: lumped capacitance per
+// particle, conduction through particle-particle and particle-wall contacts (Batchelor & O'Brien
+// 1977), the external heat rate the coupling writes, and the energy accounts
+// (docs/particle_heat.md).
+//
+// The fields are extras of the field table (ParticleStore::addField), registered only when
+// particles.heat is true, so that a run without heat moves, stores and writes nothing more:
+//   temperature  T (K)    ghosts (build + update), migration, state
+//   heat_rate    Q (W)    the conduction sum of the last force computation (owned; no travel)
+//   heat_ext     qExt (W) written by the coupling per owned particle, held over the sub-steps
+//                         (like fExt): migration, state
+//
+// Conduction runs as its own pass over the half Verlet list after the force pass (chosen once:
+// the force pass is the same code with heat off), visiting the entries in the force pass's order
+// and computing each pair once with the lower-K particle first. An owned-ghost pair is computed
+// by each rank for its own particle from the same operands (the ghost's T is current: ghost
+// update), so the heat one particle gains is the heat the other loses, bit for bit, across ranks.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "coloc/dem/dem.hpp"
+#include "contact.hpp"
+#include "neighbour_search.hpp"
+
+namespace coloc::dem::detail {
+
+class HeatTransfer {
+ public:
+  bool on = false;                   // particles.heat
+  bool conduction = true;            // particles.contact_conduction
+  double wallT = 0;                  // particles.wall_temperature (0: adiabatic walls)
+  std::vector<double> cp;            // per material, J/(kg K)
+  std::vector<double> kPair, kWall;  // effective conductivity: [a * nMat + b], [a]
+  int nMat = 0;
+  std::size_t iT = 0, iQ = 0, iExt = 0;  // indices in ParticleStore::extra
+
+  // Energy accounts (J). Local to this rank (summed by the report): wallHeat, extHeat,
+  // outflowEnthalpy. Global (the same on every rank, like DemFlow's in tallies): inflowEnthalpy.
+  double wallHeat = 0, extHeat = 0, outflowEnthalpy = 0, inflowEnthalpy = 0;
+
+  /// Reads the keys and the materials' heat properties; registers the fields when on.
+  void setup(const Config& cfg, const std::vector<Material>& mats, ParticleStore& p);
+  /// Q of the owned particles from the contacts at the current positions and temperatures
+  /// (ghosts' T current); the wall heat rate of this rank into wallRate().
+  void conduct(ParticleStore& p, const NeighbourSearch& s);
+  /// T += dt (Q + qExt) / (m c_p) for the owned particles; the accounts advance by dt.
+  void integrate(ParticleStore& p, double dt);
+  /// Enthalpy m c_p T of owned particle i (J).
+  double enthalpy(const ParticleStore& p, std::size_t i) const {
+    return p.mass[i] * cp[static_cast<std::size_t>(p.material[i])] * p.extra[iT].data[0][i];
+  }
+  /// The explicit-Euler stability check: dt <= kStableFraction m c_p / H_max for the smallest
+  /// particle of each material (rMin; infinity: none) in contact with its own material and the
+  /// wall at the overlap limit. ConfigError on particles.dt.
+  void checkTimeStep(double dt, double overlapLimit, const std::vector<Material>& mats,
+                     const std::vector<double>& rMin) const;
+  static constexpr double kStableFraction = 0.1;
+
+ private:
+  double wallRate_ = 0;  // W, into the particles through the walls (last conduct)
+};
+
+}  // namespace coloc::dem::detail
