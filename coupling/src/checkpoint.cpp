@@ -263,6 +263,13 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
                                                     {"have_old", c.haveOld ? 1 : 0},
                                                     {"rates_stale", c.ratesStale ? 1 : 0}};
   for (const auto& [k, v] : ints) file.setAttribute(group, k, v);
+  if (!fluid.fields().T.data().empty()) {  // fluid.heat: the energy accounting
+    file.setAttribute(group, "heat_enthalpy_initial", c.heatEnthalpy0);
+    file.setAttribute(group, "heat_source", c.heatSource);
+    for (std::size_t b = 0; b < 6; ++b)
+      file.setAttribute(group, "heat_face_" + std::to_string(b), c.heatFace[b]);
+    file.setAttribute(group, "heat_started", static_cast<long long>(c.heatStarted ? 1 : 0));
+  }
 }
 
 void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
@@ -309,6 +316,13 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
   }
   c.haveOld = file.attributeInt(group, "have_old") != 0;
   c.ratesStale = file.attributeInt(group, "rates_stale") != 0;
+  if (!fluid.fields().T.data().empty()) {  // fluid.heat (the table above read T)
+    c.heatEnthalpy0 = file.attributeDouble(group, "heat_enthalpy_initial");
+    c.heatSource = file.attributeDouble(group, "heat_source");
+    for (std::size_t b = 0; b < 6; ++b)
+      c.heatFace[b] = file.attributeDouble(group, "heat_face_" + std::to_string(b));
+    c.heatStarted = file.attributeInt(group, "heat_started") != 0;
+  }
   fluid.restoreState(c);
 }
 

@@ -28,9 +28,17 @@ void forLayer(Field3<double>& f, int b, int layer, int srcLayer, F&& fn) {
 
 namespace {
 /// One condition from its JSON object; `key` names it in messages, d is the face's axis.
-FaceBc parseFaceBc(const std::string& key, const Json& j, int d, const GlobalGrid& grid) {
+FaceBc parseFaceBc(const std::string& key, const Json& j, int d, const GlobalGrid& grid,
+                   bool heat) {
   const std::string type = j.at("type").get<std::string>();
   FaceBc f;
+  if (j.contains("temperature") && j.at("temperature").get<double>() >= 0) {
+    f.fixedTemperature = true;
+    f.temperature = j.at("temperature").get<double>();
+  }
+  if (heat && type == "inlet" && !f.fixedTemperature)
+    throw ConfigError(key + ".temperature",
+                      "fluid.heat = true: an inlet needs the temperature of its inflow (K)");
   if (type == "auto") {
     f.type = grid.periodic[d] ? BcType::Periodic : BcType::Wall;
   } else if (type == "periodic") {
@@ -91,12 +99,13 @@ void checkBoundaryConfig(const Config& cfg, const GlobalGrid& grid) {
 BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
   BoxBc bc;
   bc.cells = grid.cells;
+  const bool heat = cfg.boolean("fluid.heat");
   for (int d = 0; d < 3; ++d)
     for (int s = 0; s < 2; ++s) {
       const std::string key = std::string("fluid.boundary.") + kFace[d][s];
       const Json& j = cfg.at(key);
       const std::string type = j.at("type").get<std::string>();
-      const FaceBc f = parseFaceBc(key, j, d, grid);
+      const FaceBc f = parseFaceBc(key, j, d, grid, heat);
       const bool periodicBc = f.type == BcType::Periodic;
       if (periodicBc != grid.periodic[d])
         throw ConfigError(key, std::string("boundary '") + type +
@@ -139,7 +148,7 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
     if (grid.periodic[d])
       throw ConfigError(key + ".face", "face " + faceName + " is periodic (domain.periodic." +
                                            kAxis[d] + "): a patch needs a boundary face");
-    const FaceBc f = parseFaceBc(key, j, d, grid);
+    const FaceBc f = parseFaceBc(key, j, d, grid, heat);
     const int t[2] = {BoxBc::tangential(d, 0), BoxBc::tangential(d, 1)};
     double lo[2], hi[2];
     for (const char* which : {"min", "max"}) {

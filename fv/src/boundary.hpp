@@ -34,6 +34,10 @@ struct FaceBc {
   Real3 velocity{0, 0, 0};   // inlet velocity, or wall velocity
   bool superficial = false;  // inlet: velocity is a volume flux per area (u = U / eps)
   double pressure = 0;       // outlet kinematic pressure
+  // fluid.heat: inlet temperature (inflow and face value), or a wall's / slip face's fixed
+  // temperature (K); fixedTemperature false: adiabatic (wall, slip) or none (outlet).
+  bool fixedTemperature = false;
+  double temperature = 0;
 };
 
 /// The conditions of the six box faces: each face has its default condition, and

@@ -6,9 +6,13 @@
 namespace coloc::fv {
 
 namespace {
+/// The thermal key of a boundary type (fluid.heat); < 0, the default, means "not given".
+void temperatureKey(Schema& s, const char* help) {
+  s.number("temperature", -1.0, help);
+}
+
 std::map<std::string, Schema> boundaryTypes() {
   std::map<std::string, Schema> t;
-  t["auto"] = Schema();
   t["periodic"] = Schema();
   Schema inlet;
   inlet.vec3("velocity", std::nullopt, "inlet velocity vector (m/s)");
@@ -16,15 +20,26 @@ std::map<std::string, Schema> boundaryTypes() {
                 "the normal velocity is superficial (volume flux per area): the face gets "
                 "U / eps of the adjacent cell, e.g. a fluidised bed resting on the inlet; "
                 "false: Dirichlet on the interstitial velocity u (docs/fv.md)");
+  temperatureKey(inlet,
+                 "fluid.heat: temperature of the inflow (K), also the face's value for "
+                 "conduction; required with fluid.heat = true");
   t["inlet"] = inlet;
   Schema outlet;
   outlet.number("pressure", 0.0, "outlet kinematic pressure p/rho_f (m^2/s^2)");
-  t["outlet"] = outlet;
+  t["outlet"] = outlet;  // thermal: zero gradient, the outflow carries its enthalpy out
   Schema wall;
   wall.vec3("velocity", std::array<double, 3>{0, 0, 0},
             "tangential wall velocity (m/s), e.g. a moving lid; the normal component must be 0");
+  temperatureKey(wall, "fluid.heat: fixed wall temperature (K); absent (or < 0): adiabatic wall");
   t["wall"] = wall;
-  t["slip"] = Schema();
+  Schema slip;
+  temperatureKey(slip, "fluid.heat: fixed face temperature (K); absent (or < 0): adiabatic");
+  t["slip"] = slip;
+  Schema autoType;
+  temperatureKey(autoType,
+                 "fluid.heat: on a wall (a non-periodic axis) its fixed temperature (K); "
+                 "absent: adiabatic");
+  t["auto"] = autoType;
   return t;
 }
 }  // namespace
@@ -41,7 +56,9 @@ void declareConfig(Schema& s) {
     s.variant(std::string("fluid.boundary.") + f, boundaryTypes(), "auto",
               std::string("condition on the ") + f +
                   " face: auto (periodic on a periodic axis, else no-slip wall), periodic, "
-                  "inlet{velocity}, outlet{pressure}, wall{velocity}, slip");
+                  "inlet{velocity, superficial, temperature}, outlet{pressure}, "
+                  "wall{velocity, temperature}, slip{temperature}; with fluid.heat a wall or "
+                  "slip face without temperature is adiabatic, an outlet zero-gradient");
   {
     // Patches: a rectangle of a face with its own condition (the rest keeps the face's).
     std::map<std::string, Schema> patch;
@@ -59,7 +76,8 @@ void declareConfig(Schema& s) {
     s.list("fluid.patches", patch,
            "rectangles of a box face with their own condition: {type: inlet|outlet|wall|slip, "
            "face, min: [a, b], max: [a, b], and the type's keys (velocity, superficial, "
-           "pressure)}; a cell next to the face belongs to the last patch containing its face "
+           "pressure, temperature)}; a cell next to the face belongs to the last patch containing "
+           "its face "
            "centre, the rest of the face keeps fluid.boundary.<face>");
   }
   s.number("fluid.dt", 1.0e-3,
@@ -129,6 +147,16 @@ void declareConfig(Schema& s) {
             "PFMG smooths the finest level and then only where its coarsening (one axis a "
             "level) returns to an axis it already halved: one level in three on cubic cells "
             "(hypre's skip_relax, for isotropic problems); false: every level");
+  s.boolean("fluid.heat", false,
+            "solve the fluid energy equation (docs/heat.md): needs fluid.conductivity, "
+            "fluid.heat_capacity, fluid.initial_temperature and an inlet temperature per inlet; "
+            "off: no temperature at all");
+  s.number("fluid.conductivity", -1.0,
+           "fluid.heat: thermal conductivity k_f (W/(m K)), >= 0; required with fluid.heat");
+  s.number("fluid.heat_capacity", -1.0,
+           "fluid.heat: specific heat capacity c_f (J/(kg K)), > 0; required with fluid.heat");
+  s.number("fluid.initial_temperature", -1.0,
+           "fluid.heat: initial fluid temperature (K), >= 0; required with fluid.heat");
   s.number("fluid.steady_tol", 0.0,
            "steady-state stop: max|u^{n+1}-u^n| / max|u| below this ends a fluid-only run (0: off)",
            Range::nonNegative());
@@ -174,6 +202,23 @@ FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid) {
   o.skipRelax = cfg.boolean("fluid.pressure.pfmg.skip_relax");
   p.warmStart = cfg.string("fluid.pressure.initial_guess") == "previous";
   p.bc = boundaryFromConfig(cfg, grid);
+  auto& h = p.heat;
+  h.on = cfg.boolean("fluid.heat");
+  h.rho = cfg.number("fluid.rho");
+  h.conductivity = cfg.number("fluid.conductivity");
+  h.capacity = cfg.number("fluid.heat_capacity");
+  h.initial = cfg.number("fluid.initial_temperature");
+  if (h.on) {
+    if (!(h.conductivity >= 0))
+      throw ConfigError("fluid.conductivity",
+                        "fluid.heat = true needs the fluid's thermal conductivity (W/(m K), >= 0)");
+    if (!(h.capacity > 0))
+      throw ConfigError("fluid.heat_capacity",
+                        "fluid.heat = true needs the fluid's heat capacity (J/(kg K), > 0)");
+    if (!(h.initial >= 0))
+      throw ConfigError("fluid.initial_temperature",
+                        "fluid.heat = true needs the initial fluid temperature (K, >= 0)");
+  }
   return p;
 }
 

@@ -51,6 +51,11 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
   f.epsOld = CellField(cl, 1.0);
   f.K = CellField(cl, 0.0);
   for (auto& k : f.KUp) k = CellField(cl, 0.0);
+  if (prm.heat.on) {
+    f.T = CellField(cl, prm.heat.initial);
+    f.heatSource = CellField(cl, 0.0);
+    heatWork.assign(static_cast<std::size_t>(dec.ownedCellCount()), 0.0);
+  }
   M = FaceField(dec, kGhost);
   uPrev = FaceField(dec, kGhost);
   for (int c = 0; c < 3; ++c) {
@@ -87,6 +92,7 @@ FluidFields& FluidSolver::edit() {
   m.epsGhostsFresh = false;
   m.ratesStale = true;
   m.coefficientsChanged = true;
+  m.tGhostsFresh = false;
   return m.f;
 }
 void FluidSolver::Impl::takeInputs(const CouplingInputs& in) {
@@ -97,6 +103,8 @@ void FluidSolver::Impl::takeInputs(const CouplingInputs& in) {
     f.K(i, j, k) = in.K(i, j, k);
     for (int d = 0; d < 3; ++d) f.KUp[d](i, j, k) = in.KUp[d](i, j, k);
   });
+  if (in.heatSource && prm.heat.on)
+    forEach(owned, [&](int i, int j, int k) { f.heatSource(i, j, k) = (*in.heatSource)(i, j, k); });
   uGhostsFresh = false;  // a superficial inlet's face velocity is U / eps
   epsGhostsFresh = false;
   ratesStale = true;
@@ -180,6 +188,10 @@ FluidCounters FluidSolver::counters() const {
   c.unconverged = m.unconverged;
   c.haveOld = m.haveOld;
   c.ratesStale = m.ratesStale;
+  c.heatEnthalpy0 = m.heatEnthalpy0;
+  c.heatSource = m.heatSourceTotal;
+  c.heatFace = m.heatFace;
+  c.heatStarted = m.heatStarted;
   return c;
 }
 
@@ -226,6 +238,15 @@ void FluidSolver::restoreState(const FluidCounters& c) {
   m.ratesStale = c.ratesStale;
   m.inLocal = m.outLocal = m.dVolLocal = m.dVolGrossLocal = 0;
   m.dragLocal = {0, 0, 0};
+  m.heatEnthalpy0 = c.heatEnthalpy0;
+  m.heatSourceTotal = c.heatSource;
+  m.heatFace = c.heatFace;
+  m.heatStarted = c.heatStarted;
+  if (m.prm.heat.on) {
+    m.cellHalo.gather(f.T);  // untimed, like the inputs above
+    applyScalarBc(m.dec, f.T);
+    m.tGhostsFresh = true;
+  }
 }
 
 void FluidSolver::cellVelocity(std::array<CellField, 3>& out) {
@@ -327,6 +348,28 @@ Json FluidSolver::diagnostics() const {
                 {"volume_rate", dvol},
                 {"balance_scale", scale},
                 {"drag_force", Json::array({v[3], v[4], v[5]})}};
+  if (m.prm.heat.on) {
+    // Energy balance: H - H0 = sum of the face heats + source heat, relative to the largest of
+    // |H|, |H0|, the gross face heat and |source heat| (round-off of the enthalpy sum included).
+    const double H = comm.sum(m.localEnthalpy(m.f.eps));
+    const double H0 = m.heatStarted ? m.heatEnthalpy0 : H;
+    double faces = 0, gross = 0;
+    Json face;
+    const char* names[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
+    for (std::size_t b = 0; b < 6; ++b) {
+      faces += m.heatFace[b];
+      gross += std::fabs(m.heatFace[b]);
+      face[names[b]] = m.heatFace[b];
+    }
+    const double res = std::fabs(H - H0 - faces - m.heatSourceTotal);
+    const double sc = std::max({std::fabs(H), std::fabs(H0), gross, std::fabs(m.heatSourceTotal)});
+    j["checks"]["fluid_energy_balance"] = sc > 0 ? res / sc : (res > 0 ? 1.0 : 0.0);
+    j["fluid_heat"] = {{"enthalpy", H},
+                       {"enthalpy_initial", H0},
+                       {"source_heat", m.heatSourceTotal},
+                       {"face_heat", face},
+                       {"substeps_last", m.heatSubstepsLast}};
+  }
   return j;
 }
 

@@ -74,6 +74,12 @@ struct FluidSolver::Impl {
   double dVolGrossLocal = 0;  // sum over the cells of |d eps/dt| V_cell, last step, this rank
   double umaxLast = 0;        // max |u| over the faces after the last step (global)
   Real3 dragLocal{0, 0, 0};
+  // fluid.heat (heat.cpp): work array, ghosts, energy accounting (global sums, J).
+  std::vector<double> heatWork;
+  bool tGhostsFresh = true, heatStarted = false;
+  double heatEnthalpy0 = 0, heatSourceTotal = 0;
+  std::array<double, 6> heatFace{0, 0, 0, 0, 0, 0};
+  long long heatSubstepsLast = 0;
 
   Impl(const Decomposition& d, const Config& cfg, Timers& t);
   IndexBox interiorFaces(int c) const {
@@ -106,6 +112,16 @@ struct FluidSolver::Impl {
   void finishStep(double dt);
   void computeRates(double dt);
   void boundaryFluxes(double& in, double& out) const;
+
+  // ---- the energy equation (heat.cpp) -------------------------------------------------------
+  /// Sub-steps of the explicit energy update with the projected face fluxes; accounting.
+  void heatStep(double dt);
+  /// Heat into owned cell (i, j, k) per rho_f c_f (K m^3/s) from the temperatures T; box faces
+  /// add theirs to bnd[2 axis + side]; rate += sum over the faces of |F_f| + D_f.
+  double heatFluxes(const double* T, int i, int j, int k, double* bnd, double& rate) const;
+  /// rho_f c_f V sum eps T over the owned cells (J), with the given eps (eps^n or eps^{n+1}).
+  double localEnthalpy(const CellField& eps) const;
+  void refreshTemperatureGhosts();
 };
 
 }  // namespace coloc::fv

@@ -12,6 +12,15 @@
 
 namespace coloc::fv {
 
+/// fluid.heat and its material keys.
+struct HeatParams {
+  bool on = false;          // fluid.heat
+  double rho = 0;           // fluid.rho (kg/m^3)
+  double conductivity = 0;  // fluid.conductivity k_f (W/(m K))
+  double capacity = 0;      // fluid.heat_capacity c_f (J/(kg K))
+  double initial = 0;       // fluid.initial_temperature (K)
+};
+
 struct FluidParams {
   double nu = 0;          // fluid.nu (m^2/s)
   double dtFixed = 0;     // fluid.dt (s): the step, or the largest adaptive step
@@ -26,6 +35,7 @@ struct FluidParams {
   PressureSolver::Options pressure;             // fluid.pressure.* but initial_guess
   bool warmStart = true;                        // fluid.pressure.initial_guess == previous
   BoxBc bc;                                     // fluid.boundary.*, fluid.patches
+  HeatParams heat;                              // fluid.heat, conductivity, heat_capacity, ...
 };
 
 /// Reads and checks the keys (ConfigError naming the key).

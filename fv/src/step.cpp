@@ -23,6 +23,7 @@ void FluidSolver::Impl::step(double dt) {
   solvePressure();
   project(dt);
   recordBalances();
+  if (prm.heat.on) heatStep(dt);
   finishStep(dt);
 }
 

@@ -47,6 +47,11 @@ struct FluidCounters {
   double maxRate = 0;         // max over cells of sum_d |u_d|/h_d after the last step (1/s)
   double steadyResidual = 0;  // +inf before the first step
   double resLast = 0, rhsScaleLast = 0;
+  // Energy accounting (fluid.heat): the enthalpy when the first step started, the heat through
+  // each box face (xlo, xhi, ylo, ..., positive into the fluid) and from the source (J).
+  double heatEnthalpy0 = 0, heatSource = 0;
+  std::array<double, 6> heatFace{0, 0, 0, 0, 0, 0};
+  bool heatStarted = false;
   long long steps = 0, itSum = 0, solves = 0, setups = 0;
   long long itMax = 0, itLast = 0;
   long long unconverged = 0;  // pressure solves of this run that ended above the tolerance
@@ -60,6 +65,9 @@ struct CouplingInputs {
   const CellField& eps;                 // eps^{n+1}
   const CellField& K;                   // sum beta / (rho_f V_cell) (1/s)
   const std::array<CellField, 3>& KUp;  // sum beta u_p / (rho_f V_cell) (m/s^2)
+  /// fluid.heat: the heat the particles give the fluid in each cell (W); null: none this step
+  /// (the source stays as it was). Ignored with fluid.heat off.
+  const CellField* heatSource = nullptr;
 };
 
 struct FluidFields {
@@ -68,6 +76,9 @@ struct FluidFields {
   CellField eps, epsOld;         // fluid volume fraction at n+1 and n
   CellField K;                   // drag coefficient sum beta/(rho_f V) (1/s)
   std::array<CellField, 3> KUp;  // K * mean particle velocity (m/s^2)
+  // fluid.heat only (empty, unallocated, when off):
+  CellField T;           // fluid temperature (K); ghosts current after a step
+  CellField heatSource;  // heat given to the fluid in each cell (W), owned cells read
 };
 
 class FluidSolver {
@@ -135,7 +146,9 @@ class FluidSolver {
   /// steady_residual,inflow,outflow,volume_rate,drag_force}. drag_force is the drag the fluid
   /// received in the last step, sum over the faces the predictor advanced of
   /// V (KUp_f - K_f u_f^{n+1}) (per unit fluid density, m^4/s^2): the semi-implicit drag is
-  /// implicit in the projected u^{n+1}. Collective.
+  /// implicit in the projected u^{n+1}. With fluid.heat also fluid_heat.{enthalpy,
+  /// enthalpy_initial, source_heat, face_heat.{xlo..zhi}, substeps_last} and
+  /// checks.fluid_energy_balance (docs/output.md). Collective.
   Json diagnostics() const;
 
  private:
@@ -181,6 +194,10 @@ void forEachStateField(Solver& fluid, Fn&& fn) {
   visit({"eps_old", -1, 1, true}, &f.epsOld);
   visit({"K", -1, 1, false}, &f.K);
   visit({"KUp", -1, 3, false}, &f.KUp[0], &f.KUp[1], &f.KUp[2]);
+  if (!f.T.data().empty()) {  // fluid.heat (explicit scheme: no history beyond T)
+    visit({"T", -1, 1, false}, &f.T);
+    visit({"heat_source", -1, 1, false}, &f.heatSource);
+  }
 }
 
 }  // namespace coloc::fv
