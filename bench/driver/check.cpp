@@ -2,6 +2,8 @@
 // process, running nothing (docs/case-files.md). `coloc keys [PREFIX]`.
 #include "check.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -36,8 +38,7 @@ struct Plan {
 };
 
 std::string shapeOf(const Blocks& b) {
-  return std::to_string(b.dims[0]) + "x" + std::to_string(b.dims[1]) + "x" +
-         std::to_string(b.dims[2]);
+  return fmt::format("{}x{}x{}", b.dims[0], b.dims[1], b.dims[2]);
 }
 
 /// Sum of `perCell` (x fastest) over each box.
@@ -121,8 +122,8 @@ int checkCase(const CheckOptions& opts) {
   // bound as coloc plan's.
   const int N = opts.ranks;
   if (N < 1 || N > (1 << 24))
-    throw ConfigError("--ranks", std::to_string(N) + " is not a rank count coloc lays out (1 .. " +
-                                     std::to_string(1 << 24) + ")");
+    throw ConfigError("--ranks",
+                      fmt::format("{} is not a rank count coloc lays out (1 .. {})", N, 1 << 24));
   const Comm self(MPI_COMM_SELF);
   const Config cfg = Config::load(self, opts.casePath, opts.overrides, coupling::caseSchema());
   const std::vector<std::string> notes = coupling::checkCase(cfg);
@@ -218,7 +219,7 @@ int checkCase(const CheckOptions& opts) {
         p.fluidCuts = l.fluidBlocks->cuts;
         p.particleCuts = pb.cuts;
       } else {
-        p.fluidShape = p.particleShape = std::to_string(N) + " boxes";
+        p.fluidShape = p.particleShape = fmt::format("{} boxes", N);
       }
     } catch (const Error& e) {
       p.error = e.what();
