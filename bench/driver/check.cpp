@@ -370,13 +370,12 @@ int checkCase(const CheckOptions& opts) {
     if ((mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0)
       dt = static_cast<double>(sub) * demDt;
     const double nu = cfg.number("fluid.nu"), cflMax = cfg.number("fluid.cfl_max");
-    char least[64] = "";
-    if (sure < possible) std::snprintf(least, sizeof least, ", at least %.3g", sure * dt);
+    const std::string least = sure < possible ? fmt::format(", at least {:.3g}", sure * dt) : "";
     std::printf(
         "coloc check: CFD: step %g s%s, smallest cell %g m, reference speed %g m/s: CFL "
         "%.3g%s (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
         dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, possible * dt,
-        least, cflMax, nu * dt / (h * h));
+        least.c_str(), cflMax, nu * dt / (h * h));
     if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
       std::printf(", %.0f DEM sub-steps a CFD step", dt / demDt);
     std::printf("\n");
@@ -386,15 +385,12 @@ int checkCase(const CheckOptions& opts) {
     const bool bySubsteps = (mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0;
     const char* lower = bySubsteps ? "coupling.dem_substeps or particles.dt" : "fluid.dt";
     if (sure * dt > cflMax) {
-      char msg[400];
-      std::snprintf(msg, sizeof msg,
-                    "the CFL of the first step would be at least %.3g (step %g s, an inlet's "
-                    "velocity), above fluid.cfl_max = %g: the run would stop in its first step; "
-                    "lower %s%s",
-                    sure * dt, dt, cflMax, lower,
-                    bySubsteps ? "" : " (fluid.adaptive_dt then keeps the later steps below it)");
       cflKey = bySubsteps ? "coupling.dem_substeps" : "fluid.dt";
-      cflError = msg;
+      cflError = fmt::format(
+          "the CFL of the first step would be at least {:.3g} (step {:g} s, an inlet's velocity), "
+          "above fluid.cfl_max = {:g}: the run would stop in its first step; lower {}{}",
+          sure * dt, dt, cflMax, lower,
+          bySubsteps ? "" : " (fluid.adaptive_dt then keeps the later steps below it)");
     } else if (possible * dt > cflMax) {
       std::printf(
           "coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run may stop at its "
