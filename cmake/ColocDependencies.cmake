@@ -12,7 +12,7 @@ endif()
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(CLI11 REQUIRED)
-find_package(fmt REQUIRED)  # the driver's log and progress table (bench/driver/run_log.hpp)
+find_package(fmt REQUIRED)  # every message (CONTRIBUTING.md, "Messages"), the driver's log
 find_package(HYPRE REQUIRED)
 find_package(SLEEF REQUIRED)  # vectorised exp/log for the drag laws (coupling/src/simd_math.hpp)
 if(COLOC_BUILD_TESTS)

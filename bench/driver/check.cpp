@@ -2,6 +2,8 @@
 // process, running nothing (docs/case-files.md). `coloc keys [PREFIX]`.
 #include "check.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -36,8 +38,7 @@ struct Plan {
 };
 
 std::string shapeOf(const Blocks& b) {
-  return std::to_string(b.dims[0]) + "x" + std::to_string(b.dims[1]) + "x" +
-         std::to_string(b.dims[2]);
+  return fmt::format("{}x{}x{}", b.dims[0], b.dims[1], b.dims[2]);
 }
 
 /// Sum of `perCell` (x fastest) over each box.
@@ -121,8 +122,8 @@ int checkCase(const CheckOptions& opts) {
   // bound as coloc plan's.
   const int N = opts.ranks;
   if (N < 1 || N > (1 << 24))
-    throw ConfigError("--ranks", std::to_string(N) + " is not a rank count coloc lays out (1 .. " +
-                                     std::to_string(1 << 24) + ")");
+    throw ConfigError("--ranks",
+                      fmt::format("{} is not a rank count coloc lays out (1 .. {})", N, 1 << 24));
   const Comm self(MPI_COMM_SELF);
   const Config cfg = Config::load(self, opts.casePath, opts.overrides, coupling::caseSchema());
   const std::vector<std::string> notes = coupling::checkCase(cfg);
@@ -218,7 +219,7 @@ int checkCase(const CheckOptions& opts) {
         p.fluidCuts = l.fluidBlocks->cuts;
         p.particleCuts = pb.cuts;
       } else {
-        p.fluidShape = p.particleShape = std::to_string(N) + " boxes";
+        p.fluidShape = p.particleShape = fmt::format("{} boxes", N);
       }
     } catch (const Error& e) {
       p.error = e.what();
@@ -369,13 +370,12 @@ int checkCase(const CheckOptions& opts) {
     if ((mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0)
       dt = static_cast<double>(sub) * demDt;
     const double nu = cfg.number("fluid.nu"), cflMax = cfg.number("fluid.cfl_max");
-    char least[64] = "";
-    if (sure < possible) std::snprintf(least, sizeof least, ", at least %.3g", sure * dt);
+    const std::string least = sure < possible ? fmt::format(", at least {:.3g}", sure * dt) : "";
     std::printf(
         "coloc check: CFD: step %g s%s, smallest cell %g m, reference speed %g m/s: CFL "
         "%.3g%s (fluid.cfl_max = %g), viscous number nu dt/h^2 = %.3g",
         dt, cfg.boolean("fluid.adaptive_dt") ? " (first; adaptive)" : "", h, u, possible * dt,
-        least, cflMax, nu * dt / (h * h));
+        least.c_str(), cflMax, nu * dt / (h * h));
     if (mode == RunMode::Coupled || mode == RunMode::DummyDem)
       std::printf(", %.0f DEM sub-steps a CFD step", dt / demDt);
     std::printf("\n");
@@ -385,15 +385,12 @@ int checkCase(const CheckOptions& opts) {
     const bool bySubsteps = (mode == RunMode::Coupled || mode == RunMode::DummyDem) && sub > 0;
     const char* lower = bySubsteps ? "coupling.dem_substeps or particles.dt" : "fluid.dt";
     if (sure * dt > cflMax) {
-      char msg[400];
-      std::snprintf(msg, sizeof msg,
-                    "the CFL of the first step would be at least %.3g (step %g s, an inlet's "
-                    "velocity), above fluid.cfl_max = %g: the run would stop in its first step; "
-                    "lower %s%s",
-                    sure * dt, dt, cflMax, lower,
-                    bySubsteps ? "" : " (fluid.adaptive_dt then keeps the later steps below it)");
       cflKey = bySubsteps ? "coupling.dem_substeps" : "fluid.dt";
-      cflError = msg;
+      cflError = fmt::format(
+          "the CFL of the first step would be at least {:.3g} (step {:g} s, an inlet's velocity), "
+          "above fluid.cfl_max = {:g}: the run would stop in its first step; lower {}{}",
+          sure * dt, dt, cflMax, lower,
+          bySubsteps ? "" : " (fluid.adaptive_dt then keeps the later steps below it)");
     } else if (possible * dt > cflMax) {
       std::printf(
           "coloc check: warning: the CFL estimate exceeds fluid.cfl_max: the run may stop at its "

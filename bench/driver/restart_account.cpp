@@ -1,7 +1,8 @@
 // What a restart keeps from its checkpoint and what it takes from the case (restart_account.hpp).
 #include "restart_account.hpp"
 
-#include <cstdio>
+#include <fmt/format.h>
+
 #include <utility>
 #include <vector>
 
@@ -27,7 +28,7 @@ void diffConfig(const Json& a, const Json& b, const std::string& path, Differenc
     }
     if (a.is_array()) {
       for (std::size_t i = 0; i < a.size(); ++i)
-        diffConfig(a[i], b[i], path + "." + std::to_string(i), out);
+        diffConfig(a[i], b[i], fmt::format("{}.{}", path, i), out);
       return;
     }
     for (const auto& [k, v] : a.items())
@@ -98,15 +99,15 @@ void refuseEmptyRestart(const Config& cfg, const std::string& checkpoint, long l
   const long long runSteps = cfg.integer("run.steps");
   const double endTime = cfg.number("run.end_time");
   if (runSteps > 0 && steps >= runSteps)
-    throw ConfigError("run.steps", std::to_string(runSteps) + ": the checkpoint " + checkpoint +
-                                       " is at step " + std::to_string(steps) +
-                                       " already, nothing to run (run.steps counts from the "
-                                       "initial condition: give more steps)");
+    throw ConfigError("run.steps",
+                      fmt::format("{}: the checkpoint {} is at step {} already, nothing to run "
+                                  "(run.steps counts from the initial condition: give more steps)",
+                                  runSteps, checkpoint, steps));
   if (runSteps == 0 && time >= endTime * (1.0 - 1e-12)) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "%.9g s: the checkpoint is at t = %.9g s", endTime, time);
-    throw ConfigError("run.end_time", std::string(buf) + " (" + checkpoint +
-                                          ") already, nothing to run (give a later end)");
+    throw ConfigError("run.end_time",
+                      fmt::format("{:.9g} s: the checkpoint is at t = {:.9g} s ({}) already, "
+                                  "nothing to run (give a later end)",
+                                  endTime, time, checkpoint));
   }
 }
 

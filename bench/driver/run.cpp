@@ -4,6 +4,7 @@
 // end snapshot.hpp.
 #include "run.hpp"
 
+#include <fmt/format.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -63,7 +64,7 @@ void libraryAborted() {
   if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
     msg += " (address-space limit RLIMIT_AS, ulimit -v: " +
            coupling::bytesText(static_cast<double>(as.rlim_cur)) + ")";
-  msg = "rank " + std::to_string(rank) + ": " + msg;
+  msg = fmt::format("rank {}: {}", rank, msg);
   std::fprintf(stderr, "coloc: error: %s; stopping every rank (exit status %d)\n", msg.c_str(),
                kRunFailedStatus);
   std::fflush(stderr);
@@ -423,13 +424,12 @@ int Run::failInLoop(const FailureChannel::Verdict& v) {
     writeReport("failed", v.code, "re-balancing failed: " + v.message, "", 0);
     return v.code;
   }
-  char when[200];
-  if (v.where == kStep)
-    std::snprintf(when, sizeof when, "the run failed in step %lld (from t = %.9g s)",
-                  simulation_->steps() + 1, simulation_->time());
-  else
-    std::snprintf(when, sizeof when, "the run failed after step %lld (t = %.9g s), %s",
-                  simulation_->steps(), simulation_->time(), kPartName[std::clamp(v.where, 0, 4)]);
+  const std::string when =
+      v.where == kStep
+          ? fmt::format("the run failed in step {} (from t = {:.9g} s)", simulation_->steps() + 1,
+                        simulation_->time())
+          : fmt::format("the run failed after step {} (t = {:.9g} s), {}", simulation_->steps(),
+                        simulation_->time(), kPartName[std::clamp(v.where, 0, 4)]);
   // The state at a failure of the physics is kept for inspection (marked failed, not
   // restartable); after an I/O failure nothing more is written but the report.
   std::string saved, saveError;
@@ -437,7 +437,7 @@ int Run::failInLoop(const FailureChannel::Verdict& v) {
   if (checkpoint_.onFailure && v.code == kRunFailedStatus && !outOfMemory(v.message)) {
     const std::string path = failedCheckpointPath(checkpoint_.pathAt(simulation_->steps() + 1));
     const auto w = phase(channel_, kRunFailedStatus, [&] {
-      simulation_->writeCheckpoint(path, "failed: " + std::string(when) + ": " + v.message);
+      simulation_->writeCheckpoint(path, "failed: " + when + ": " + v.message);
     });
     if (w.failed())
       saveError = w.message;
@@ -455,8 +455,8 @@ int Run::failInLoop(const FailureChannel::Verdict& v) {
       log_.err("coloc: last good checkpoint: {}\n", lastCheckpoint_);
     if (!saveError.empty()) log_.err("coloc: could not write the failed state: {}\n", saveError);
   }
-  writeReport("failed", v.code, std::string(when) + ": " + v.message,
-              saved.empty() ? lastCheckpoint_ : saved, 0);
+  writeReport("failed", v.code, when + ": " + v.message, saved.empty() ? lastCheckpoint_ : saved,
+              0);
   return v.code;
 }
 
@@ -522,10 +522,8 @@ void Run::printSummary(const std::string& reportPath) {
     // The steps of this run: after a restart, those from the checkpoint's step on.
     const auto start = simulation_->runStart();
     const long long last = j["run"]["steps"].get<long long>();
-    char resumed[96] = "";
-    if (start[0] > 0)
-      std::snprintf(resumed, sizeof resumed, ", steps %lld-%lld after the restart", start[0] + 1,
-                    last);
+    const std::string resumed =
+        start[0] > 0 ? fmt::format(", steps {}-{} after the restart", start[0] + 1, last) : "";
     log_.out(
         "coloc: {} steps ({} DEM sub-steps){}, t = {:.6g} s, {:.3f} s wall, "
         "{:.3g} cell-steps/s, {:.3g} particle-steps/s, inter-physics {:.3f}% of the step\n",

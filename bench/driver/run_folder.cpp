@@ -2,6 +2,7 @@
 #include "run_folder.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -54,8 +55,8 @@ void FolderLocks::lock(const std::string& dir, const std::string& key,
   char when[64] = "?";
   std::tm tm{};
   if (::gmtime_r(&now, &tm)) std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S UTC", &tm);
-  const std::string who = "pid " + std::to_string(::getpid()) + " on host " + host + ", started " +
-                          when + ", case " + casePath + "\n";
+  const std::string who =
+      fmt::format("pid {} on host {}, started {}, case {}\n", ::getpid(), host, when, casePath);
   if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, who.data(), who.size(), 0) < 0) {
     // The lock is held; only the note of who holds it is missing.
   }
@@ -170,7 +171,7 @@ void refuseMixedRuns(const RunFolders& f, const std::vector<std::string>& files)
     const fs::path rel = fs::path(files[i]).lexically_relative(f.outDir);
     list += (i ? ", " : "") + (rel.empty() || *rel.begin() == ".." ? files[i] : rel.string());
   }
-  if (files.size() > shown) list += " and " + std::to_string(files.size() - shown) + " more";
+  if (files.size() > shown) list += fmt::format(" and {} more", files.size() - shown);
   std::error_code ec;
   const std::string where = fs::equivalent(f.outDir, f.dataDir, ec)
                                 ? "the output folder '" + f.outDir + "' holds"

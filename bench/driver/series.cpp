@@ -2,6 +2,7 @@
 #include "series.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -26,11 +27,9 @@ Series::Series(const Comm& comm, const std::string& path, coupling::Simulation& 
     for (const auto& v : ids) {
       const double x = v.get<double>();
       if (x != std::floor(x) || x < 0 || x >= static_cast<double>(total)) {
-        char id[32];
-        std::snprintf(id, sizeof id, "%.17g", x);
-        throw ConfigError("output.series_particle_ids", "particle id " + std::string(id) +
-                                                            " is not one of the ids 0.." +
-                                                            std::to_string(total - 1));
+        throw ConfigError(
+            "output.series_particle_ids",
+            fmt::format("particle id {:.17g} is not one of the ids 0..{}", x, total - 1));
       }
       ids_.push_back(static_cast<long long>(x));
     }

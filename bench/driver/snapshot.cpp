@@ -12,7 +12,6 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
 #include <vector>
 
 #include "coloc/io/output.hpp"
@@ -38,19 +37,22 @@ int exitStatus(int waitStatus) {
   return -1;
 }
 
+/// What runCapturing() returns: the command's exit status (128 + the signal that ended it), or
+/// -1 with `error` saying why it could not be run.
+struct Captured {
+  int status = -1;
+  std::string error;
+};
+
 /// Starts `argv` (argv[0] looked up in PATH unless it holds a '/') with its stdout and stderr
-/// on one pipe, each line passed to `line`; returns its exit status, or -1 with `error` set when
-/// it could not be started.
+/// on one pipe, each line passed to `line`, and waits for it.
 template <class F>
-int runCapturing(const std::vector<std::string>& args, F&& line, std::string& error) {
+Captured runCapturing(const std::vector<std::string>& args, F&& line) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) {
-    error = std::strerror(errno);
-    return -1;
-  }
+  if (::pipe2(fds, O_CLOEXEC) != 0) return {-1, std::strerror(errno)};
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_adddup2(&actions, fds[1], 1);  // dup2 clears close-on-exec
@@ -65,8 +67,7 @@ int runCapturing(const std::vector<std::string>& args, F&& line, std::string& er
   ::close(fds[1]);
   if (rc != 0) {
     ::close(fds[0]);
-    error = std::strerror(rc);
-    return -1;
+    return {-1, std::strerror(rc)};
   }
   if (std::FILE* in = ::fdopen(fds[0], "r")) {
     char text[1024];
@@ -77,8 +78,8 @@ int runCapturing(const std::vector<std::string>& args, F&& line, std::string& er
   }
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return -1;
-  return exitStatus(status);
+    if (errno != EINTR) return {-1, std::strerror(errno)};
+  return {exitStatus(status), {}};
 }
 
 }  // namespace
@@ -116,18 +117,15 @@ int drawSnapshot(const SnapshotJob& job) {
   // Which script drew it (the installed one or the source tree's), in the run's log only.
   if (job.ofRun) log.file("coloc: drawing snapshot.png with {}\n", script.string());
   // What the script says goes to the terminal (unless quiet) and the log.
-  std::string error;
-  const int rc = runCapturing(
-      args,
-      [&](const char* line) {
-        if (job.quiet)
-          log.file("{}", line);
-        else
-          log.out("{}", line);
-      },
-      error);
+  const Captured ran = runCapturing(args, [&](const char* line) {
+    if (job.quiet)
+      log.file("{}", line);
+    else
+      log.out("{}", line);
+  });
+  const int rc = ran.status;
   if (!job.ofRun) {
-    if (rc < 0) log.err("coloc: error: cannot run {}: {}\n", python, error);
+    if (rc < 0) log.err("coloc: error: cannot run {}: {}\n", python, ran.error);
     return rc < 0 ? 1 : rc;
   }
   if (rc != 0)

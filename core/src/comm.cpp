@@ -1,5 +1,7 @@
 #include "coloc/core/comm.hpp"
 
+#include <fmt/format.h>
+
 #include <cstdio>
 
 #include "coloc/core/error.hpp"
@@ -79,7 +81,7 @@ std::string Comm::firstError(const std::string& localError, int exitCode) const 
   if (first == size()) return {};
   std::string msg = broadcast(first == me ? localError : std::string(), first);
   failureShared();
-  if (size() > 1) msg = "rank " + std::to_string(first) + ": " + msg;
+  if (size() > 1) msg = fmt::format("rank {}: {}", first, msg);
   return msg;
 }
 

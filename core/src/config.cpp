@@ -4,6 +4,7 @@
 #include "coloc/core/config.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -15,7 +16,6 @@
 #include <filesystem>
 #include <limits>
 #include <set>
-#include <sstream>
 
 #include "coloc/core/files.hpp"
 #include "key_path.hpp"
@@ -60,12 +60,11 @@ std::string lineColumn(const std::string& text, std::size_t at) {
       1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
   const auto bol = text.rfind('\n', at);
   const std::size_t column = at - (bol == std::string::npos ? 0 : bol + 1) + 1;
-  return "line " + std::to_string(line) + ", column " + std::to_string(column) + " (byte offset " +
-         std::to_string(at) + ")";
+  return fmt::format("line {}, column {} (byte offset {})", line, column, at);
 }
 
 std::string tooDeepText() {
-  return "lists and objects nested deeper than " + std::to_string(kMaxJsonDepth) + " levels";
+  return fmt::format("lists and objects nested deeper than {} levels", kMaxJsonDepth);
 }
 
 }  // namespace
@@ -88,8 +87,8 @@ void applyOverride(Json& doc, const std::string& assignment) {
     });
   } catch (const TooDeep&) {
     throw ConfigError(path.empty() ? "--set" : path,
-                      "the --set value has " + tooDeepText() + " (at character " +
-                          std::to_string(tooDeepAt(text, false) + 1) + " of the value)");
+                      fmt::format("the --set value has {} (at character {} of the value)",
+                                  tooDeepText(), tooDeepAt(text, false) + 1));
   } catch (const Json::exception&) {
     value = text;  // a bare word is a string
   }
@@ -104,8 +103,8 @@ void applyOverride(Json& doc, const std::string& assignment) {
         throw ConfigError(path, "segment '" + p + "' must index a list");
       const auto idx = std::stoul(p);
       if (idx >= node->size())
-        throw ConfigError(path, "list index " + p + " is out of range (size " +
-                                    std::to_string(node->size()) + ")");
+        throw ConfigError(path,
+                          fmt::format("list index {} is out of range (size {})", p, node->size()));
       node = &(*node)[idx];
     } else {
       if (node->is_null()) *node = Json::object();
@@ -163,8 +162,7 @@ class DuplicateKeyCheck {
   std::string childPath() const {
     if (frames_.empty()) return "";
     const Frame& f = frames_.back();
-    return f.array ? f.path + "[" + std::to_string(f.index) + "]"
-                   : detail::joinKey(f.path, f.lastKey);
+    return f.array ? fmt::format("{}[{}]", f.path, f.index) : detail::joinKey(f.path, f.lastKey);
   }
   std::string source_;
   std::vector<Frame> frames_;
@@ -188,7 +186,7 @@ std::string whereIs(const std::string& text, const std::string& token) {
   if (pos == std::string::npos) return "";
   const auto line =
       1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n');
-  std::string where = "line " + std::to_string(line);
+  std::string where = fmt::format("line {}", line);
   const auto colon = text.rfind(':', pos);
   if (colon != std::string::npos) {
     const auto q2 = text.rfind('"', colon);
@@ -265,8 +263,8 @@ Config Config::load(const Comm& comm, const std::string& path,
         text.append(buf.data(), static_cast<std::size_t>(n));
       }
       if (err.empty() && text.size() > kMaxCaseFileBytes)
-        err = "case file '" + path + "' is larger than " + std::to_string(kMaxCaseFileBytes >> 20) +
-              " MiB: not a case file";
+        err = fmt::format("case file '{}' is larger than {} MiB: not a case file", path,
+                          kMaxCaseFileBytes >> 20);
       if (!err.empty()) text.clear();
     }
     if (fd >= 0) ::close(fd);

@@ -1,5 +1,7 @@
 #include "coloc/core/failure.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
@@ -71,7 +73,7 @@ struct Watch {
       int rank = 0, size = 1;
       MPI_Comm_rank(MPI_COMM_WORLD, &rank);
       MPI_Comm_size(MPI_COMM_WORLD, &size);
-      const std::string who = size > 1 ? "rank " + std::to_string(rank) + ": " : "";
+      const std::string who = size > 1 ? fmt::format("rank {}: ", rank) : "";
       std::fprintf(stderr,
                    "coloc: error: %s%s (the other ranks did not join the error check within "
                    "%g s: stopping every rank)\n",
@@ -204,7 +206,7 @@ FailureChannel::Verdict FailureChannel::agree(const std::string& error, int code
   v.code = c[0];
   v.where = c[1];
   v.message = comm_.broadcast(v.rank == me ? error : std::string(), v.rank);
-  if (v.failing < size && size > 1) v.message = "rank " + std::to_string(v.rank) + ": " + v.message;
+  if (v.failing < size && size > 1) v.message = fmt::format("rank {}: {}", v.rank, v.message);
   failureShared();
   return v;
 }

@@ -2,6 +2,7 @@
 // choices, typed variants and lists; resolve() checks a user document against it and fills the
 // defaults, describe() writes the reference (coloc --help-keys). Config (config.cpp) reads with it.
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -88,19 +89,18 @@ long long integerOf(const std::string& path, const Json& v, int bits = 64) {
   const long long maxVal = bits == 32 ? 2147483647LL : std::numeric_limits<long long>::max();
   const char* typeText = bits == 32 ? "a 32-bit integer" : "a 64-bit integer";
   auto tooLarge = [&](const std::string& text) {
-    return ConfigError(path, "value " + text + " is beyond what " + std::string(typeText) +
-                                 " holds (at most " + std::to_string(maxVal) + ")");
+    return ConfigError(
+        path, fmt::format("value {} is beyond what {} holds (at most {})", text, typeText, maxVal));
   };
   if (!isNumber(v) || !isIntegral(v)) {
     if (v.is_number_float()) {
       const double d = v.get<double>();
       if (std::isfinite(d) && d == std::floor(d)) {
-        std::ostringstream os;
-        os << d;
-        if (std::fabs(d) >= static_cast<double>(maxVal)) throw tooLarge(os.str());
-        throw ConfigError(path, "value " + os.str() +
-                                    " is a whole number too large to be exact as written; "
-                                    "write it as a plain integer");
+        const std::string text = fmt::format("{:g}", d);
+        if (std::fabs(d) >= static_cast<double>(maxVal)) throw tooLarge(text);
+        throw ConfigError(path, fmt::format("value {} is a whole number too large to be exact as "
+                                            "written; write it as a plain integer",
+                                            text));
       }
     }
     throw ConfigError(path, "expected an integer, got " + typeName(v));
@@ -108,23 +108,22 @@ long long integerOf(const std::string& path, const Json& v, int bits = 64) {
   long long n = 0;
   if (v.is_number_unsigned()) {
     const auto u = v.get<std::uint64_t>();
-    if (u > static_cast<std::uint64_t>(maxVal)) throw tooLarge(std::to_string(u));
+    if (u > static_cast<std::uint64_t>(maxVal)) throw tooLarge(fmt::format("{}", u));
     n = static_cast<long long>(u);
   } else if (v.is_number_integer()) {
     n = v.get<long long>();
   } else {
     n = static_cast<long long>(v.get<double>());
   }
-  if (n > maxVal || n < -maxVal - 1) throw tooLarge(std::to_string(n));
+  if (n > maxVal || n < -maxVal - 1) throw tooLarge(fmt::format("{}", n));
   return n;
 }
 
 void checkRange(const std::string& path, double v, const Range& r) {
   if (!std::isfinite(v)) throw ConfigError(path, "must be finite");
   if (!r.contains(v)) {
-    std::ostringstream os;
-    os << "value " << v << " is out of range, expected " << r.describe();
-    throw ConfigError(path, os.str());
+    throw ConfigError(path,
+                      fmt::format("value {:g} is out of range, expected {}", v, r.describe()));
   }
 }
 
@@ -137,10 +136,8 @@ bool Range::contains(double v) const {
 }
 
 std::string Range::describe() const {
-  std::ostringstream os;
-  os.precision(15);  // integer bounds such as 2147483647 exactly
-  os << (loOpen ? "(" : "[") << lo << ", " << hi << (hiOpen ? ")" : "]");
-  return os.str();
+  // 15 significant digits: integer bounds such as 2147483647 exactly
+  return fmt::format("{}{:.15g}, {:.15g}{}", loOpen ? "(" : "[", lo, hi, hiOpen ? ")" : "]");
 }
 
 KeySpec& Schema::insert(const std::string& path, KeySpec spec) {
@@ -362,11 +359,12 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
       case KeyKind::IntVec3:
       case KeyKind::NumberList: {
         if (!v.is_array() || (spec.kind != KeyKind::NumberList && v.size() != 3))
-          throw ConfigError(path, "expected " + kindName(spec.kind) + ", got " + typeName(v) +
-                                      (v.is_array() ? " of " + std::to_string(v.size()) : ""));
+          throw ConfigError(path,
+                            fmt::format("expected {}, got {}{}", kindName(spec.kind), typeName(v),
+                                        v.is_array() ? fmt::format(" of {}", v.size()) : ""));
         Json arr = Json::array();
         for (std::size_t i = 0; i < v.size(); ++i) {
-          const std::string ip = path + "[" + std::to_string(i) + "]";
+          const std::string ip = fmt::format("{}[{}]", path, i);
           const bool intOnly = spec.kind == KeyKind::IntVec3;
           if (intOnly) {
             const long long n = integerOf(ip, v[i], 32);
@@ -396,7 +394,7 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         } else if (v.is_array()) {
           for (std::size_t i = 0; i < v.size(); ++i) {
             if (!v[i].is_string())
-              throw ConfigError(path + "[" + std::to_string(i) + "]",
+              throw ConfigError(fmt::format("{}[{}]", path, i),
                                 "expected a name (a string), got " + typeName(v[i]));
             names.push_back(v[i].get<std::string>());
           }
@@ -427,7 +425,7 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         if (!v.is_array()) throw ConfigError(path, "expected a list, got " + typeName(v));
         Json arr = Json::array();
         for (std::size_t i = 0; i < v.size(); ++i)
-          arr.push_back(resolveTyped(spec.items, v[i], path + "[" + std::to_string(i) + "]"));
+          arr.push_back(resolveTyped(spec.items, v[i], fmt::format("{}[{}]", path, i)));
         out[key] = arr;
         break;
       }

@@ -1,11 +1,11 @@
 // Whole-case checks and the memory estimate: coupling/include/coloc/coupling/case_checks.hpp.
 #include "coloc/coupling/case_checks.hpp"
 
+#include <fmt/format.h>
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -26,9 +26,7 @@ constexpr double kPi = 3.14159265358979323846;
 const char* const kFaces[6] = {"xlo", "xhi", "ylo", "yhi", "zlo", "zhi"};
 
 std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
+  return fmt::format("{:g}", v);
 }
 
 void checkName(const Config& cfg) {
@@ -60,10 +58,10 @@ void checkTimeSteps(const Config& cfg, std::vector<std::string>& notes) {
   if (sub > 0) {
     const double step = static_cast<double>(sub) * dtp;
     if (adaptive || std::fabs(step - dtf) > 1e-9 * step)
-      notes.push_back("coupling.dem_substeps = " + std::to_string(sub) + ": every CFD step is " +
-                      std::to_string(sub) + " x particles.dt = " + num(step) +
-                      " s; fluid.dt = " + num(dtf) + " s" +
-                      (adaptive ? " and fluid.adaptive_dt are" : " is") + " not used");
+      notes.push_back(fmt::format(
+          "coupling.dem_substeps = {0}: every CFD step is {0} x particles.dt = {1} s; fluid.dt = "
+          "{2} s{3} not used",
+          sub, num(step), num(dtf), adaptive ? " and fluid.adaptive_dt are" : " is"));
     return;
   }
   if (adaptive) {
@@ -109,7 +107,7 @@ void checkBoundaries(const Config& cfg, std::vector<std::string>& notes) {
   const Json patches = cfg.has("fluid.patches") ? cfg.at("fluid.patches") : Json::array();
   for (std::size_t k = 0; k < patches.size(); ++k) {
     const std::string type = patches[k].at("type").get<std::string>();
-    if (type == "inlet" && inlet.empty()) inlet = "fluid.patches." + std::to_string(k);
+    if (type == "inlet" && inlet.empty()) inlet = fmt::format("fluid.patches.{}", k);
     if (type == "outlet") outlet = true;
   }
   if (!inlet.empty() && !outlet)
@@ -156,7 +154,7 @@ std::vector<InflowCount> inflowCounts(const Config& cfg) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     const Json& src = list[i];
     InflowCount c;
-    c.key = "particles.inflow[" + std::to_string(i) + "]";
+    c.key = fmt::format("particles.inflow[{}]", i);
     // radii: fixed (radius), discrete (diameters), uniform and lognormal (min, max)
     const Json& sz = src.at("size");
     const std::string type = sz.at("type").get<std::string>();
@@ -284,8 +282,8 @@ std::vector<std::string> checkCase(const Config& cfg) {
   const std::string mode = cfg.string("run.mode");
   if (mode == "coupled" || mode == "dummy_dem") selfVelocityFromConfig(cfg);
   if (cfg.integer("run.steps") > 0 && cfg.number("run.end_time") > 0)
-    notes.push_back("run.steps = " + std::to_string(cfg.integer("run.steps")) +
-                    " is given: run.end_time is not used");
+    notes.push_back(
+        fmt::format("run.steps = {} is given: run.end_time is not used", cfg.integer("run.steps")));
   return notes;
 }
 
@@ -381,8 +379,7 @@ double memoryLimitPerRank(const Config& cfg, int ranksOnNode, std::string* how) 
   }
   const double avail = kb * 1024.0;
   if (how)
-    *how = "MemAvailable " + bytesText(avail) + " / " + std::to_string(ranksOnNode) +
-           " rank(s) on this node";
+    *how = fmt::format("MemAvailable {} / {} rank(s) on this node", bytesText(avail), ranksOnNode);
   double limit = avail / std::max(ranksOnNode, 1);
   // An address-space limit (ulimit -v) binds first when it leaves less than that: what it still
   // lets this process map, plus the base the estimate counts (already mapped now).
@@ -408,14 +405,10 @@ double memoryLimitPerRank(const Config& cfg, int ranksOnNode, std::string* how) 
 }
 
 std::string bytesText(double b) {
-  char s[64];
   if (b >= 1024.0 * 1024 * 1024 * 1024 * 10)
-    std::snprintf(s, sizeof s, "%.3g TiB", b / (1024.0 * 1024 * 1024 * 1024));
-  else if (b >= 1024.0 * 1024 * 1024)
-    std::snprintf(s, sizeof s, "%.2f GiB", b / (1024.0 * 1024 * 1024));
-  else
-    std::snprintf(s, sizeof s, "%.1f MiB", b / (1024.0 * 1024));
-  return s;
+    return fmt::format("{:.3g} TiB", b / (1024.0 * 1024 * 1024 * 1024));
+  if (b >= 1024.0 * 1024 * 1024) return fmt::format("{:.2f} GiB", b / (1024.0 * 1024 * 1024));
+  return fmt::format("{:.1f} MiB", b / (1024.0 * 1024));
 }
 
 void checkMemory(const Comm& world, const Config& cfg) {
@@ -433,13 +426,12 @@ void checkMemory(const Comm& world, const Config& cfg) {
     std::string how;
     const double limit = memoryLimitPerRank(cfg, onNode, &how);
     if (limit > 0 && m.total() > limit) {
-      char cells[96];
-      std::snprintf(cells, sizeof cells, "%lld cells", m.cells);
       err = std::string("domain.cells, particles.sources") +
             (m.inflowBytes > 0 ? ", particles.inflow" : "") + ": the case needs about " +
-            bytesText(m.total()) + " a rank (" + cells + " in the largest block: fluid " +
-            bytesText(m.fluidBytes) + ", coupling " + bytesText(m.couplingBytes) + "; " +
-            num(m.particles) + " particles: " + bytesText(m.particleBytes) +
+            bytesText(m.total()) + " a rank (" + fmt::format("{} cells", m.cells) +
+            " in the largest block: fluid " + bytesText(m.fluidBytes) + ", coupling " +
+            bytesText(m.couplingBytes) + "; " + num(m.particles) +
+            " particles: " + bytesText(m.particleBytes) +
             (m.inflowBytes > 0 ? "; inflow waiting lists " + bytesText(m.inflowBytes) : "") +
             "; base " + bytesText(m.baseBytes) + "), the machine offers " + bytesText(limit) +
             " (" + how +

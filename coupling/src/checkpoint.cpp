@@ -1,9 +1,10 @@
 // Restart checkpoints: layout in coupling/include/coloc/coupling/checkpoint.hpp, docs/output.md.
 #include "coloc/coupling/checkpoint.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <optional>
 #include <sstream>
@@ -32,15 +33,12 @@ std::vector<double> three(const Real3& v) {
 const char* const kAxis[3] = {"x", "y", "z"};
 
 std::string g9(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
+  return fmt::format("{:.9g}", v);
 }
 
-std::string fmt(const std::array<double, 3>& v) {
-  char b[128];
-  std::snprintf(b, sizeof b, "(%.17g, %.17g, %.17g)", v[0], v[1], v[2]);
-  return b;
+/// "(x, y, z)", every digit (a box that differs in the last bit shows it).
+std::string g17(const std::array<double, 3>& v) {
+  return fmt::format("({:.17g}, {:.17g}, {:.17g})", v[0], v[1], v[2]);
 }
 
 /// Rows of a [N][3] dataset as an array-of-structs.
@@ -107,8 +105,8 @@ CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
                   std::string(kCheckpointFormat) + "\")");
     info.version = f.attributeInt("/", "version");
     if (info.version != kCheckpointVersion)
-      throw Error("checkpoint format version " + std::to_string(info.version) +
-                  ", this coloc reads version " + std::to_string(kCheckpointVersion));
+      throw Error(fmt::format("checkpoint format version {}, this coloc reads version {}",
+                              info.version, kCheckpointVersion));
     info.status = f.attributeString("/", "status");
     info.caseName = f.attributeString("/", "case");
     info.mode = f.attributeString("/", "mode");
@@ -163,17 +161,16 @@ CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const
                 "' (the state at a failure, for inspection); restart from the last good "
                 "checkpoint");
   if (info.grid.cells != g.cells)
-    throw Error(where + "its grid has " + std::to_string(info.grid.cells[0]) + "x" +
-                std::to_string(info.grid.cells[1]) + "x" + std::to_string(info.grid.cells[2]) +
-                " cells, the case " + std::to_string(g.cells[0]) + "x" +
-                std::to_string(g.cells[1]) + "x" + std::to_string(g.cells[2]) + " (domain.cells)");
+    throw Error(fmt::format("{}its grid has {}x{}x{} cells, the case {}x{}x{} (domain.cells)",
+                            where, info.grid.cells[0], info.grid.cells[1], info.grid.cells[2],
+                            g.cells[0], g.cells[1], g.cells[2]));
   for (int d = 0; d < 3; ++d) {
     const double tol = 1e-12 * std::max(1.0, std::fabs(g.length[d]));
     if (std::fabs(info.grid.origin[d] - g.origin[d]) > tol ||
         std::fabs(info.grid.length[d] - g.length[d]) > tol)
-      throw Error(where + "its box is origin " + fmt(info.grid.origin) + ", length " +
-                  fmt(info.grid.length) + "; the case's origin " + fmt(g.origin) + ", length " +
-                  fmt(g.length));
+      throw Error(where + "its box is origin " + g17(info.grid.origin) + ", length " +
+                  g17(info.grid.length) + "; the case's origin " + g17(g.origin) + ", length " +
+                  g17(g.length));
     if (info.grid.periodic[d] != g.periodic[d])
       throw Error(where + "its periodicity along " + kAxis[d] + " differs from the case's");
   }
@@ -336,8 +333,7 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
   // group, the extra ones under group/extra, listed in its attribute "fields"
   std::string extras;
   for (const auto& e : p.extra)
-    if (e.ops & dem::kOpState)
-      extras += e.name + " " + std::to_string(e.components) + " " + std::to_string(e.ops) + ";";
+    if (e.ops & dem::kOpState) extras += fmt::format("{} {} {};", e.name, e.components, e.ops);
   if (!extras.empty()) {
     file.createGroup(group + "/extra");
     file.setAttribute(group + "/extra", "fields", extras);
@@ -443,8 +439,8 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
   std::string err;
   auto bad = [&](const std::string& dataset, std::size_t i, const std::string& what) {
     if (err.empty())
-      err = group + "/" + dataset + ": particle id " + std::to_string(p.id[i]) + " (row " +
-            std::to_string(i) + " of this rank's share) " + what;
+      err = fmt::format("{}/{}: particle id {} (row {} of this rank's share) {}", group, dataset,
+                        p.id[i], i, what);
   };
   for (std::size_t i = 0; i < n && err.empty(); ++i) {
     if (p.id[i] < 0) bad("id", i, "has a negative id");
@@ -454,8 +450,8 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
       bad("radius", i, "has radius " + g9(p.radius[i]) + " (must be positive and finite)");
     if (p.material[i] < 0 || static_cast<std::size_t>(p.material[i]) >= materials)
       bad("material", i,
-          "has material " + std::to_string(p.material[i]) + ", the case has " +
-              std::to_string(materials) + " (particles.materials)");
+          fmt::format("has material {}, the case has {} (particles.materials)", p.material[i],
+                      materials));
     if (err.empty() && p.radius[i] > 0 && p.mass[i] > 0) {
       const double rho = p.mass[i] / (4.0 / 3.0 * M_PI * p.radius[i] * p.radius[i] * p.radius[i]);
       if (!std::isfinite(rho)) bad("mass", i, "has a density that is not finite");
@@ -493,24 +489,25 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
   }
   if (err.empty() && comm.isRoot()) {
     const auto dup = std::adjacent_find(all.begin(), all.end());
-    if (dup != all.end())
-      err = group + "/id: id " + std::to_string(*dup) + " appears more than once";
+    if (dup != all.end()) err = fmt::format("{}/id: id {} appears more than once", group, *dup);
   }
   auto known = [&](std::int64_t id) { return std::binary_search(all.begin(), all.end(), id); };
   for (std::size_t c = 0; c < s.contacts.size() && err.empty(); ++c) {
     const auto& h = s.contacts[c];
     if (!known(h.holder))
-      err = group + "/contacts/holder: row " + std::to_string(c) +
-            " of this rank's share names id " + std::to_string(h.holder) +
-            ", which no particle has";
+      err = fmt::format(
+          "{}/contacts/holder: row {} of this rank's share names id {}, which no "
+          "particle has",
+          group, c, h.holder);
     else if (h.partner < -6 || (h.partner >= 0 && !known(h.partner)))  // walls: -1..-6
-      err = group + "/contacts/partner: row " + std::to_string(c) +
-            " of this rank's share names id " + std::to_string(h.partner) +
-            ", which no particle has";
+      err = fmt::format(
+          "{}/contacts/partner: row {} of this rank's share names id {}, which no "
+          "particle has",
+          group, c, h.partner);
     for (int d = 0; d < 3 && err.empty(); ++d)
       if (!std::isfinite(h.shear[static_cast<std::size_t>(d)]) ||
           !std::isfinite(h.roll[static_cast<std::size_t>(d)]))
-        err = group + "/contacts/shear, roll: row " + std::to_string(c) + " is not finite";
+        err = fmt::format("{}/contacts/shear, roll: row {} is not finite", group, c);
   }
   comm.raiseIfAny(err.empty() ? err : "checkpoint '" + path + "' is damaged: " + err);
 }

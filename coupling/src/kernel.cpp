@@ -1,5 +1,7 @@
 #include "coloc/coupling/kernel.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -215,10 +217,9 @@ void interpolate(const Stencils& s, std::span<const CellField* const> f,
 void interpolate(const Stencils& s, std::span<const CellField* const> f,
                  std::span<double* const> out, std::size_t first, std::size_t count) {
   if (f.size() != out.size() || f.size() > kMaxFusedFields || first + count > s.count())
-    throw Error("coupling: interpolate: " + std::to_string(f.size()) + " fields, " +
-                std::to_string(out.size()) + " outputs (at most " +
-                std::to_string(kMaxFusedFields) + "), particles " + std::to_string(first) + " + " +
-                std::to_string(count) + " of " + std::to_string(s.count()));
+    throw Error(fmt::format(
+        "coupling: interpolate: {} fields, {} outputs (at most {}), particles {} + {} of {}",
+        f.size(), out.size(), kMaxFusedFields, first, count, s.count()));
   // Fewer particles than half the cells: one pass a field. The stencils then share few cells,
   // and the 4 rows of cells one field's stencils walk stream better than 4 N rows at once
   // (bench_coupling BM_Sample7: 1e5 particles in 64^3 cells, 2x faster than one fused pass).
@@ -232,8 +233,8 @@ void interpolate(const Stencils& s, std::span<const CellField* const> f,
 
 void deposit(const Stencils& s, std::span<const DepositTerm> terms) {
   if (terms.size() > kMaxFusedFields)
-    throw Error("coupling: deposit: " + std::to_string(terms.size()) + " terms (at most " +
-                std::to_string(kMaxFusedFields) + ")");
+    throw Error(
+        fmt::format("coupling: deposit: {} terms (at most {})", terms.size(), kMaxFusedFields));
   depositAny(s, terms, 0, s.count(), std::make_index_sequence<kMaxFusedFields>());
 }
 

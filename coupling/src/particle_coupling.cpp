@@ -1,10 +1,11 @@
 #include "particle_coupling.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <sstream>
 
 #include "coloc/core/error.hpp"
 
@@ -44,12 +45,10 @@ void ParticleCoupling::locate(const ParticleView& view, const FieldLayout& layou
   std::string err;
   if (bad >= 0) {
     const auto i = static_cast<std::size_t>(bad);
-    std::ostringstream os;
-    os << "particle " << view_.id[i] << " at (" << view_.x[0][i] << ", " << view_.x[1][i] << ", "
-       << view_.x[2][i]
-       << ") is more than one cell outside its block: it cannot be coupled (check particles.skin "
-          "and the time step)";
-    err = os.str();
+    err = fmt::format(
+        "particle {} at ({:g}, {:g}, {:g}) is more than one cell outside its block: it cannot be "
+        "coupled (check particles.skin and the time step)",
+        view_.id[i], view_.x[0][i], view_.x[1][i], view_.x[2][i]);
   }
   dec_->comm().raiseIfAny(err);
   // The volumes: one pow per distinct radius in a run of equal radii (the same values).
@@ -201,12 +200,11 @@ double ParticleCoupling::correctForSelfVelocity(std::size_t i, double epsFluid,
     const double cb = c * beta / (1.0 + inertia * beta);  // c beta'
     if (!(cb < 0.5)) {
       if (failure_.empty()) {
-        std::ostringstream os;
-        os << "coupling.self_velocity: particle " << p.id[i] << " (d/h = " << d / h
-           << ") is too large for the correction (its self-induced velocity would be " << cb
-           << " of its slip; the model holds below 0.5): use larger cells or "
-           << "coupling.self_velocity = none";
-        failure_ = os.str();
+        failure_ = fmt::format(
+            "coupling.self_velocity: particle {} (d/h = {:g}) is too large for the correction "
+            "(its self-induced velocity would be {:g} of its slip; the model holds below 0.5): "
+            "use larger cells or coupling.self_velocity = none",
+            p.id[i], d / h, cb);
       }
       return denom;
     }

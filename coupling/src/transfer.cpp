@@ -1,5 +1,7 @@
 #include "coloc/coupling/transfer.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -61,7 +63,7 @@ class Proxy final : public ParticleTransfer {
     std::string err;
     for (std::size_t i = 0; i < n; ++i) {
       const int r = dec_.ownerOfPoint({p.x[0][i], p.x[1][i], p.x[2][i]});
-      if (r < 0 && err.empty()) err = "particle " + std::to_string(p.id[i]) + " is outside the box";
+      if (r < 0 && err.empty()) err = fmt::format("particle {} is outside the box", p.id[i]);
       dest_[i] = std::max(r, 0);
     }
     dec_.comm().raiseIfAny(err);

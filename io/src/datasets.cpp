@@ -1,5 +1,7 @@
 // Cell fields, face components and particle arrays as collective slabs of global datasets.
 // Layout and rules: coloc/io/h5io.hpp.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <span>
@@ -34,10 +36,9 @@ Slab fieldSlab(const Decomposition& dec, const IndexBox& owned, Int3 globalN, in
 std::string layoutError(const Decomposition& dec, const Field3<double>& f, Int3 stagger) {
   const auto& l = f.layout();
   if (l.n != dec.cells() || l.stagger != stagger)
-    return "field layout does not match this rank's block (owned cells " + std::to_string(l.n[0]) +
-           "x" + std::to_string(l.n[1]) + "x" + std::to_string(l.n[2]) + ", block " +
-           std::to_string(dec.cells()[0]) + "x" + std::to_string(dec.cells()[1]) + "x" +
-           std::to_string(dec.cells()[2]) + ")";
+    return fmt::format(
+        "field layout does not match this rank's block (owned cells {}x{}x{}, block {}x{}x{})",
+        l.n[0], l.n[1], l.n[2], dec.cells()[0], dec.cells()[1], dec.cells()[2]);
   return {};
 }
 

@@ -2,6 +2,8 @@
 // (h5detail.hpp); the public calls are in h5file.cpp (the file, attributes) and datasets.cpp.
 #include "h5detail.hpp"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>  // fmt::join
 #include <sys/statvfs.h>
 
 #include <algorithm>
@@ -76,9 +78,7 @@ ElemTypes elemTypes(Elem e) {
 namespace {
 
 std::string dimsText(const hsize_t* d, int rank) {
-  std::string s = "[";
-  for (int a = 0; a < rank; ++a) s += (a ? ", " : "") + std::to_string(d[a]);
-  return s + "]";
+  return fmt::format("[{}]", fmt::join(d, d + rank, ", "));
 }
 
 /// Select this rank's part of `fspace` and make the matching memory space.

@@ -1,6 +1,7 @@
 // What a failed write's system call said (no HDF5: also in the SMPI build). io_reason.hpp.
 #include "io_reason.hpp"
 
+#include <fmt/format.h>
 #include <sys/statvfs.h>
 
 #include <cerrno>
@@ -34,9 +35,8 @@ std::string spaceReason(const std::string& file) {
   const unsigned long long avail =
       static_cast<unsigned long long>(st.f_bavail) * static_cast<unsigned long long>(st.f_frsize);
   if (avail >= (1ull << 20)) return {};
-  return " (No space left on device: " + std::to_string(avail) +
-         " bytes free on the file system of '" + (dir.empty() ? std::string(".") : dir.string()) +
-         "')";
+  return fmt::format(" (No space left on device: {} bytes free on the file system of '{}')", avail,
+                     dir.empty() ? std::string(".") : dir.string());
 }
 
 }  // namespace coloc::h5

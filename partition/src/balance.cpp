@@ -1,5 +1,6 @@
 #include "coloc/partition/balance.hpp"
 
+#include <fmt/format.h>
 #include <mpi.h>
 
 #include <algorithm>
@@ -205,9 +206,10 @@ BalancedLayout balanceBlocks(const GlobalGrid& grid, const std::vector<double>& 
     }
   }
   if (!std::isfinite(best.maxBlockCost))
-    throw ConfigError("partition.strategy", "no process grid of " + std::to_string(ranks) +
-                                                " ranks fits the grid with blocks of at least " +
-                                                std::to_string(minCells) + " cells");
+    throw ConfigError("partition.strategy",
+                      fmt::format("no process grid of {} ranks fits the grid with blocks of at "
+                                  "least {} cells",
+                                  ranks, minCells));
   evaluateLayout(grid, cost, best);
   return best;
 }

@@ -1,5 +1,6 @@
 #include "coloc/partition/box_halo.hpp"
 
+#include <fmt/format.h>
 #include <mpi.h>
 
 #include <algorithm>
@@ -151,10 +152,10 @@ BoxHaloPlan::BoxHaloPlan(const Comm& comm, const BoxLayout& l, const FieldLayout
   for (int d = 0; d < 3; ++d) {
     const bool whole = mine.lo[d] == 0 && mine.hi[d] == g.cells[d];
     if (layout.n[d] < gw && !whole)
-      throw ConfigError("partition.strategy", "tiled: a box is " + std::to_string(layout.n[d]) +
-                                                  " cells thick along " + "xyz"[d] +
-                                                  ", thinner than the " + std::to_string(gw) +
-                                                  " ghost layers");
+      throw ConfigError("partition.strategy",
+                        fmt::format("tiled: a box is {} cells thick along {}, thinner than the {} "
+                                    "ghost layers",
+                                    layout.n[d], "xyz"[d], gw));
   }
   const Offsets at(storage);
   std::vector<int> sendCount(static_cast<std::size_t>(size), 0),

@@ -1,5 +1,7 @@
 #include "coloc/partition/comm_plan.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <string>
 
@@ -26,7 +28,7 @@ void CommPlan::group(std::span<const int> rank, std::span<const int> index) {
   std::string err;
   for (int r : rank) {
     if (r < 0 || r >= size) {
-      err = "CommPlan: destination rank " + std::to_string(r) + " outside the communicator";
+      err = fmt::format("CommPlan: destination rank {} outside the communicator", r);
       break;
     }
     ++sendCount_[static_cast<std::size_t>(r)];
@@ -94,7 +96,7 @@ void CommPlan::neighbourCounts(std::span<const int> neighbours) {
   for (int r = 0; r < size; ++r) {
     const bool listed = std::binary_search(peers_.begin(), peers_.end(), r);
     if (!listed && sendCount_[static_cast<std::size_t>(r)] > 0)
-      throw Error("CommPlan: rows for rank " + std::to_string(r) + ", not a neighbour");
+      throw Error(fmt::format("CommPlan: rows for rank {}, not a neighbour", r));
   }
   requests_.clear();
   requests_.reserve(2 * peers_.size());

@@ -1,5 +1,7 @@
 #include "coloc/partition/decomposition.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -39,9 +41,10 @@ Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims, int 
   for (int d = 0; d < 3; ++d)
     if (dims[d] > 0) fixed *= dims[d];
   if (size % fixed != 0)
-    throw ConfigError("partition.dims", "the fixed process counts (product " +
-                                            std::to_string(fixed) + ") do not divide the " +
-                                            std::to_string(size) + " ranks");
+    throw ConfigError(
+        "partition.dims",
+        fmt::format("the fixed process counts (product {}) do not divide the {} ranks", fixed,
+                    size));
   if (dims[0] > 0 && dims[1] > 0 && dims[2] > 0) return dims;  // fully fixed: checked by uniform()
   // Legal: the even split leaves every block at least minCells cells along every axis.
   const auto legal = [&](const Int3& c) {
@@ -89,13 +92,11 @@ Int3 Decomposition::chooseDims(int size, const GlobalGrid& grid, Int3 dims, int 
   }
   if (best[0] > 0) return best;
   throw ConfigError("partition.dims",
-                    "no process grid of " + std::to_string(size) +
-                        " ranks gives every block at least " + std::to_string(minCells) +
-                        " cells along every axis (domain.cells = " + std::to_string(grid.cells[0]) +
-                        " x " + std::to_string(grid.cells[1]) + " x " +
-                        std::to_string(grid.cells[2]) +
-                        (fixed > 1 ? ", partition.dims fixes " + std::to_string(fixed) : "") +
-                        "): use fewer ranks, more cells (domain.cells) or other partition.dims");
+                    fmt::format("no process grid of {} ranks gives every block at least {} cells "
+                                "along every axis (domain.cells = {} x {} x {}{}): use fewer "
+                                "ranks, more cells (domain.cells) or other partition.dims",
+                                size, minCells, grid.cells[0], grid.cells[1], grid.cells[2],
+                                fixed > 1 ? fmt::format(", partition.dims fixes {}", fixed) : ""));
 }
 
 Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, Int3 dims,
@@ -108,16 +109,14 @@ Decomposition Decomposition::uniform(const Comm& world, const GlobalGrid& grid, 
   dims = chooseDims(size, grid, dims, minCells);
   int product = dims[0] * dims[1] * dims[2];
   if (product != size)
-    throw ConfigError("partition.dims", "process grid " + std::to_string(dims[0]) + "x" +
-                                            std::to_string(dims[1]) + "x" +
-                                            std::to_string(dims[2]) + " does not match " +
-                                            std::to_string(size) + " ranks");
+    throw ConfigError("partition.dims", fmt::format("process grid {}x{}x{} does not match {} ranks",
+                                                    dims[0], dims[1], dims[2], size));
   std::array<std::vector<int>, 3> cuts;
   for (int d = 0; d < 3; ++d) {
     if (dims[d] > grid.cells[d])
-      throw ConfigError("partition.dims", std::to_string(dims[d]) + " ranks along " + kAxis[d] +
-                                              " but only " + std::to_string(grid.cells[d]) +
-                                              " cells: each block needs a cell");
+      throw ConfigError("partition.dims",
+                        fmt::format("{} ranks along {} but only {} cells: each block needs a cell",
+                                    dims[d], kAxis[d], grid.cells[d]));
     cuts[d] = evenCuts(grid.cells[d], dims[d]);
   }
   return fromCuts(world, grid, std::move(cuts));
@@ -149,13 +148,13 @@ Decomposition Decomposition::fromBoxes(const Comm& world, const GlobalGrid& grid
                                        std::vector<Int3> lo, std::vector<Int3> hi) {
   const int P = world.size();
   if (static_cast<int>(lo.size()) != P || static_cast<int>(hi.size()) != P)
-    throw ConfigError("partition.boxes",
-                      std::to_string(lo.size()) + " boxes for " + std::to_string(P) + " ranks");
+    throw ConfigError("partition.boxes", fmt::format("{} boxes for {} ranks", lo.size(), P));
   for (int r = 0; r < P; ++r)
     for (int d = 0; d < 3; ++d)
       if (lo[r][d] < 0 || hi[r][d] > grid.cells[d] || hi[r][d] <= lo[r][d])
-        throw ConfigError("partition.boxes", "box of rank " + std::to_string(r) + " is empty or " +
-                                                 "leaves the grid along " + kAxis[d]);
+        throw ConfigError(
+            "partition.boxes",
+            fmt::format("box of rank {} is empty or leaves the grid along {}", r, kAxis[d]));
   Decomposition dec;
   dec.grid_ = grid;
   dec.boxLo_ = std::move(lo);
@@ -181,7 +180,7 @@ Decomposition Decomposition::fromBoxes(const Comm& world, const GlobalGrid& grid
       if (dec.boxLo_[static_cast<std::size_t>(r)] != it.lo ||
           dec.boxHi_[static_cast<std::size_t>(r)] != it.hi)
         throw ConfigError("partition.boxes",
-                          "the boxes do not tile the grid (rank " + std::to_string(r) + ")");
+                          fmt::format("the boxes do not tile the grid (rank {})", r));
       dec.tree_[node] = {-1, 0, r, r};
       continue;
     }
@@ -230,9 +229,8 @@ Decomposition Decomposition::fromBoxes(const Comm& world, const GlobalGrid& grid
 }
 
 std::string Decomposition::shape() const {
-  if (isTiled()) return std::to_string(size_) + (size_ == 1 ? " box" : " boxes");
-  return std::to_string(dims_[0]) + "x" + std::to_string(dims_[1]) + "x" +
-         std::to_string(dims_[2]) + " blocks";
+  if (isTiled()) return fmt::format("{} {}", size_, size_ == 1 ? "box" : "boxes");
+  return fmt::format("{}x{}x{} blocks", dims_[0], dims_[1], dims_[2]);
 }
 
 void Decomposition::requireGrid(const char* what) const {

@@ -1,5 +1,7 @@
 #include "coloc/partition/halo.hpp"
 
+#include <fmt/format.h>
+
 #include <string>
 
 #include "coloc/core/error.hpp"
@@ -58,9 +60,10 @@ HaloPlan::HaloPlan(const Decomposition& dec, const FieldLayout& layout, const Fi
     static const char* axis[3] = {"x", "y", "z"};
     if (g > n && (dec.neighbour(d, -1) != MPI_PROC_NULL || dec.neighbour(d, +1) != MPI_PROC_NULL))
       throw ConfigError("partition.dims",
-                        std::string("a block is ") + std::to_string(n) + " cells thick along " +
-                            axis[d] + ", thinner than the " + std::to_string(g) +
-                            " ghost layers the solvers need: use fewer ranks along that axis");
+                        fmt::format("a block is {} cells thick along {}, thinner than the {} "
+                                    "ghost layers the solvers need: use fewer ranks along that "
+                                    "axis",
+                                    n, axis[d], g));
     Side low, high;
     low.peer = dec.neighbour(d, -1);
     high.peer = dec.neighbour(d, +1);

@@ -1,5 +1,7 @@
 #include "coloc/partition/strategy.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -43,15 +45,13 @@ Blocks uniformBlocks(const StrategyInput& in) {
   Blocks b;
   b.dims = Decomposition::chooseDims(in.ranks, in.grid, in.dims, in.minCells);
   if (b.size() != in.ranks)
-    throw ConfigError("partition.dims", "process grid " + std::to_string(b.dims[0]) + "x" +
-                                            std::to_string(b.dims[1]) + "x" +
-                                            std::to_string(b.dims[2]) + " does not match " +
-                                            std::to_string(in.ranks) + " ranks");
+    throw ConfigError("partition.dims", fmt::format("process grid {}x{}x{} does not match {} ranks",
+                                                    b.dims[0], b.dims[1], b.dims[2], in.ranks));
   for (int d = 0; d < 3; ++d) {
     if (b.dims[d] > in.grid.cells[d])
-      throw ConfigError("partition.dims", std::to_string(b.dims[d]) + " ranks along " + "xyz"[d] +
-                                              " but only " + std::to_string(in.grid.cells[d]) +
-                                              " cells: each block needs a cell");
+      throw ConfigError("partition.dims",
+                        fmt::format("{} ranks along {} but only {} cells: each block needs a cell",
+                                    b.dims[d], "xyz"[d], in.grid.cells[d]));
     b.cuts[d] = Decomposition::evenCuts(in.grid.cells[d], b.dims[d]);
   }
   return b;

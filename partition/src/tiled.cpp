@@ -1,5 +1,7 @@
 #include "coloc/partition/tiled.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -80,9 +82,9 @@ class Bisector {
     std::vector<Split> top;
     splits(box, p, rollout && p > 2 ? kRollouts : 1, top);
     if (top.empty())
-      throw ConfigError("partition.strategy", "tiled: no legal cut of a region of " +
-                                                  std::to_string(box.volume()) + " cells into " +
-                                                  std::to_string(p) + " boxes");
+      throw ConfigError("partition.strategy",
+                        fmt::format("tiled: no legal cut of a region of {} cells into {} boxes",
+                                    box.volume(), p));
     std::size_t pick = 0;
     if (top.size() > 1) {
       double best = std::numeric_limits<double>::infinity();
@@ -305,9 +307,9 @@ TiledLayout tiledBoxes(const GlobalGrid& grid, const std::vector<double>& cost, 
     const IndexBox all{{0, 0, 0}, grid.cells};
     if (bis.capacity(all) < ranks)
       throw ConfigError("partition.strategy",
-                        "tiled: the grid holds at most " + std::to_string(bis.capacity(all)) +
-                            " boxes of at least " + std::to_string(opt.minCells) +
-                            " cells a side, not " + std::to_string(ranks));
+                        fmt::format("tiled: the grid holds at most {} boxes of at least {} cells "
+                                    "a side, not {}",
+                                    bis.capacity(all), opt.minCells, ranks));
     bis.bisect(all, ranks, 0, /*rollout=*/true);
     Tried t{0, 0, boxes};
     for (const auto& b : boxes) {
