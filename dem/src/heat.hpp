@@ -1,7 +1,7 @@
 // dem/src/heat.hpp — particle temperature (particles.heat) as a part: lumped capacitance per
 // particle, conduction through particle-particle and particle-wall contacts (Batchelor & O'Brien
 // 1977), the external heat rate the coupling writes, and the energy accounts
-// (docs/particle_heat.md).
+// (docs/heat.md, "Particles").
 //
 // The fields are extras of the field table (ParticleStore::addField), registered only when
 // particles.heat is true, so that a run without heat moves, stores and writes nothing more:

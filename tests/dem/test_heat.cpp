@@ -1,4 +1,5 @@
-// Particle temperature and conduction through contacts (issue 31, DEM part; docs/particle_heat.md).
+// Particle temperature and conduction through contacts (issue 31, DEM part; docs/heat.md,
+// "Particles").
 //  - two pairs of spheres of two materials in a periodic chain along x (each sphere touches its
 //    two neighbours, of the other material, at the same overlap: forces cancel, nothing moves)
 //    equilibrate at the two-body rate d(dT)/dt = -2 H (1/C1 + 1/C2) dT, H = 2 k_eff a,

@@ -1,7 +1,7 @@
 // Particle temperatures (particles.heat) through a checkpoint file: a bed with a hot half run
 // 200 sub-steps, its state written by writeDemState and read back by readDemState (an even split
 // of the rows, not the writer's); the restored solver continues the temperatures bit for bit
-// against the run that wrote it, 200 sub-steps on (docs/particle_heat.md).
+// against the run that wrote it, 200 sub-steps on (docs/heat.md, "Particles").
 #include <gtest/gtest.h>
 #include <unistd.h>
 

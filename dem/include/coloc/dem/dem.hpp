@@ -5,7 +5,7 @@
 //  - the coupling writes an external force per owned particle into fExt (N), held constant
 //    over the sub-steps until written again; it reads x, v, radius of owned particles.
 //    Owned particles may sit up to skin/2 outside the block between neighbour rebuilds.
-//  - with particles.heat (docs/particle_heat.md), the store has the extra fields "temperature"
+//  - with particles.heat (docs/heat.md, "Particles"), the store has the extra fields "temperature"
 //    (K; kept current on ghosts), "heat_rate" (W; the contact conduction of the last force
 //    computation) and "heat_ext" (W): the coupling writes an external heat rate per owned
 //    particle into heat_ext, held constant over the sub-steps until written again, exactly as
