@@ -21,6 +21,7 @@ if ((${#missing[@]})); then
   echo "coloc setup-smpi: installing ${missing[*]}"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
+    -o Dpkg::Options::=--force-unsafe-io \
     "${missing[@]}" >/dev/null
 fi
 

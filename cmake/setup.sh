@@ -26,7 +26,11 @@ if ((${#missing[@]})); then
   sudo=""
   [[ $(id -u) -ne 0 ]] && sudo="sudo"
   $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  # --force-unsafe-io: dpkg skips its fsync per file, which halves the unpacking of these ~100
+  # packages on a fresh machine (measured 216 s -> 117 s, docs/architecture.md "Build time");
+  # what it risks is a half-written package after a power cut, which a CI machine never keeps.
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
+    -o Dpkg::Options::=--force-unsafe-io "${missing[@]}" >/dev/null
 fi
 
 # mpirun as root and with more ranks than cores (containers, CI).
