@@ -2,6 +2,8 @@
 // its stability check (HeatTransfer, heat.hpp).
 #include "heat.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -121,11 +123,12 @@ void HeatTransfer::checkTimeStep(double dt, double overlapLimit, const std::vect
     const double limit = kStableFraction * C / H;
     if (dt > limit)
       throw ConfigError("particles.dt",
-                        "particles.dt = " + fmt(dt) + " s is above " + fmt(kStableFraction) +
-                            " m c_p / H = " + fmt(limit) + " s, the explicit limit of the " +
-                            "temperature update for the smallest particle of material " +
-                            std::to_string(a) + " at the overlap limit (H = 2 k_eff a, a = " +
-                            "sqrt(R* delta)): lower particles.dt, or raise heat_capacity");
+                        fmt::format("particles.dt = {:.4g} s is above {:.4g} m c_p / H = {:.4g} "
+                                    "s, the explicit limit of the temperature update for the "
+                                    "smallest particle of material {} at the overlap limit (H = "
+                                    "2 k_eff a, a = sqrt(R* delta)): lower particles.dt, or raise "
+                                    "heat_capacity",
+                                    dt, kStableFraction, limit, a));
   }
 }
 

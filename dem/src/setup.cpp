@@ -1,5 +1,7 @@
 // dem/src/setup.cpp — setup of the DEM: materials, bins, the time-step check, the initial
 // particles.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -140,8 +142,8 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
                       "give particles.bin_cells or particles.bin_split, "
                       "not both");
   const auto range = [&] {
-    return "the interaction range " + fmt(rc) + " m (largest diameter " + fmt(dmax) + " m + skin " +
-           fmt(skin) + " m)";
+    return fmt::format("the interaction range {:.4g} m (largest diameter {:.4g} m + skin {:.4g} m)",
+                       rc, dmax, skin);
   };
   for (int d = 0; d < 3; ++d) {
     const double h = grid.spacing(d);
@@ -158,9 +160,10 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
       multiple = kc;
       key = "particles.bin_cells";
       if (!divides(kc))
-        throw ConfigError(key, "a bin of " + std::to_string(kc) + " cells does not fit the " +
-                                   "blocks along " + kAxis[d] + ": every block edge (cell " +
-                                   "cuts of the decomposition) must fall on a bin edge");
+        throw ConfigError(key, fmt::format("a bin of {} cells does not fit the blocks along {}: "
+                                           "every block edge (cell cuts of the decomposition) "
+                                           "must fall on a bin edge",
+                                           kc, kAxis[d]));
     } else {
       key = "particles.bin_cells";
       if (h >= rc) {
@@ -173,30 +176,30 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
         // A range wider than the box is refused before it becomes a bin count (a skin of 1e20
         // would overflow the cast and loop through every integer).
         if (!(rc / h <= static_cast<double>(grid.cells[d])))
-          throw ConfigError("particles.skin", range() + " is wider than the box along " + kAxis[d] +
-                                                  " (" + fmt(h * grid.cells[d]) +
-                                                  " m): lower particles.skin or the particle size");
+          throw ConfigError("particles.skin",
+                            fmt::format("{} is wider than the box along {} ({:.4g} m): lower "
+                                        "particles.skin or the particle size",
+                                        range(), kAxis[d], h * grid.cells[d]));
         multiple = static_cast<long long>(std::ceil(rc / h));
         while (multiple <= grid.cells[d] && (!divides(multiple) || multiple * h < rc)) ++multiple;
         if (multiple > grid.cells[d])
-          throw ConfigError(key, std::string("no bin made of whole cells holds ") + range() +
-                                     " and fits the blocks along " + kAxis[d] + " (cell " + fmt(h) +
-                                     " m): use larger cells or fewer ranks");
+          throw ConfigError(key, fmt::format("no bin made of whole cells holds {} and fits the "
+                                             "blocks along {} (cell {:.4g} m): use larger cells "
+                                             "or fewer ranks",
+                                             range(), kAxis[d], h));
       }
     }
     out.size[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
     out.split[d] = split;
     out.multiple[d] = split > 1 ? 1 : multiple;
     if (any && out.size[d] < rc)
-      throw ConfigError(key, "the bin edge " + fmt(out.size[d]) + " m along " + kAxis[d] +
-                                 " is smaller than " + range());
+      throw ConfigError(key, fmt::format("the bin edge {:.4g} m along {} is smaller than {}",
+                                         out.size[d], kAxis[d], range()));
     out.globalBins[d] = split > 1 ? grid.cells[d] * split : grid.cells[d] / multiple;
     if (any && grid.periodic[d] && out.globalBins[d] < 2)
-      throw ConfigError(key, std::string("a periodic axis needs at least 2 bins (") + kAxis[d] +
-                                 " has " + std::to_string(out.globalBins[d]) +
-                                 "): the box must be at least "
-                                 "twice " +
-                                 range());
+      throw ConfigError(key, fmt::format("a periodic axis needs at least 2 bins ({} has {}): the "
+                                         "box must be at least twice {}",
+                                         kAxis[d], out.globalBins[d], range()));
   }
   return out;
 }

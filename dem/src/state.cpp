@@ -1,5 +1,7 @@
 // dem/src/state.cpp — the DEM state: canonical snapshot (save) and restore from any rank's subset
 // (checkpoints, re-balancing), particle rows of the field table.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -68,7 +70,7 @@ void routeHistoriesById(const Comm& comm, const ParticleStore& p, DemState& st, 
   for (std::size_t h = 0; h < st.contacts.size(); ++h) {
     const auto& c = st.contacts[h];
     if (c.holder < 0) {
-      if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
+      if (err.empty()) err = fmt::format("a restored contact history has holder id {}", c.holder);
       dest[h] = 0;
       continue;
     }
@@ -99,8 +101,10 @@ void routeHistoriesById(const Comm& comm, const ParticleStore& p, DemState& st, 
       const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
       if (it == owner.end() || it->first != id) {
         if (err.empty())
-          err = "a restored contact history names holder " + std::to_string(id) +
-                ", which is not among the restored particles";
+          err = fmt::format(
+              "a restored contact history names holder {}, which is not among the restored "
+              "particles",
+              id);
         continue;
       }
       dest.push_back(it->second);
@@ -193,8 +197,8 @@ void DemSolver::Impl::restore(DemState& st) {
   for (std::size_t i = 0; i < q.nOwned && err.empty(); ++i)
     for (int d = 0; d < 3; ++d)
       if (!std::isfinite(x0(i, d))) {
-        err = "restored particle " + std::to_string(q.id[i]) + " has a rebuild position " +
-              "(x_rebuild) that is not finite";
+        err = fmt::format(
+            "restored particle {} has a rebuild position (x_rebuild) that is not finite", q.id[i]);
         break;
       }
   comm.raiseIfAny(err);
@@ -236,8 +240,8 @@ void DemSolver::Impl::restore(DemState& st) {
             [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t i = 0; i < n && err.empty(); ++i)
     if (p.material[i] < 0 || p.material[i] >= forces.law.nMat)
-      err = "restored particle " + std::to_string(p.id[i]) + " has material " +
-            std::to_string(p.material[i]) + " (" + std::to_string(forces.law.nMat) + " declared)";
+      err = fmt::format("restored particle {} has material {} ({} declared)", p.id[i],
+                        p.material[i], forces.law.nMat);
   comm.raiseIfAny(err);
   // 2. every history to the rank of its holder; `row` = the holder's local row
   std::vector<double> mine;
@@ -295,8 +299,9 @@ void DemSolver::Impl::restore(DemState& st) {
     const auto it = std::lower_bound(xNow.begin(), xNow.end(), p.id[i],
                                      [](const auto& e, std::int64_t id) { return e.first < id; });
     if (it == xNow.end() || it->first != p.id[i]) {
-      err = "restored particle " + std::to_string(p.id[i]) + " left its rank at the rebuild at " +
-            "its rebuild position (x_rebuild)";
+      err = fmt::format(
+          "restored particle {} left its rank at the rebuild at its rebuild position (x_rebuild)",
+          p.id[i]);
       break;
     }
     for (int d = 0; d < 3; ++d) p.x[d][i] = it->second[static_cast<std::size_t>(d)];
