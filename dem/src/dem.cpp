@@ -205,7 +205,7 @@ double DemSolver::skin() const {
   return impl_->skin;
 }
 std::array<double, 3> DemSolver::binSize() const {
-  return impl_->search.bins.bs;
+  return impl_->search.bins().bs;
 }
 long long DemSolver::rebuildCount() const {
   return impl_->rebuilds;
@@ -226,7 +226,7 @@ Json DemSolver::diagnostics() const {
                    static_cast<double>(m.forces.tally().contacts),
                    static_cast<double>(m.forces.tally().walls),
                    static_cast<double>(m.p.nGhost),
-                   static_cast<double>(m.search.list.nbr.size()),
+                   static_cast<double>(m.search.list().nbr.size()),
                    static_cast<double>(m.memory())};
   m.comm.sumInPlace(std::span<double>(loc, 6));
   const double n = std::max(1.0, loc[0]);
@@ -250,7 +250,7 @@ Json DemSolver::diagnostics() const {
   }
   j["interaction_range"] = m.rc;
   j["skin"] = m.skin;
-  j["bin_size"] = {m.search.bins.bs[0], m.search.bins.bs[1], m.search.bins.bs[2]};
+  j["bin_size"] = {m.search.bins().bs[0], m.search.bins().bs[1], m.search.bins().bs[2]};
   j["dt"] = m.integrator.dt;
   j["frozen"] = m.frozen;
   // flow: mass in (initial + inflow) = mass out (outflow faces) + mass held

@@ -50,9 +50,9 @@ void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {
   const double *X0 = p.x[0].data(), *X1 = p.x[1].data(), *X2 = p.x[2].data();
   const double* R = p.radius.data();
   const int* mat = p.material.data();
-  const int* nbr = s.list.nbr.data();
-  const int* rowStart = s.list.rowStart.data();
-  const int* items = s.bins.binItems.data();
+  const int* nbr = s.list().nbr.data();
+  const int* rowStart = s.list().rowStart.data();
+  const int* items = s.bins().binItems.data();
   const bool walls = wallT > 0;
   double wallRate = 0;
   for (std::size_t q = 0; q < nAll; ++q) {
@@ -78,7 +78,7 @@ void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {
       } else if (walls) {
         const int w = -1 - j, d = w / 2, sd = w % 2;
         const double dist =
-            sd == 0 ? xi[d] - s.bins.origin[d] : s.bins.origin[d] + s.bins.L[d] - xi[d];
+            sd == 0 ? xi[d] - s.bins().origin[d] : s.bins().origin[d] + s.bins().L[d] - xi[d];
         const double delta = ri - dist;
         if (!(delta > 0)) continue;
         const double a = std::sqrt(ri * delta);

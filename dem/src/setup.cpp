@@ -31,7 +31,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   for (int k = 0; k < 3; ++k) integrator.g[k] = grav[k];
   overlapLimit = cfg.number("particles.overlap_limit");
   dtFraction = cfg.number("particles.dt_fraction");
-  search.hist.hStart.assign(1, 0);
+  search.mutableHistory().hStart.assign(1, 0);
   readMaterials(cfg);
   heat.setup(cfg, mats, p);  // registers the temperature fields when particles.heat is on
   for (const auto& m : mats) forces.law.rolling = forces.law.rolling || m.rollingFriction > 0;
@@ -80,13 +80,13 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   // then fill them (growing ~23 arrays particle by particle cost a third of a 2M-particle set-up
   // in copies and page faults).
   {
-    const auto ownsX = [this](const double* x) { return search.bins.owns(x); };
+    const auto ownsX = [this](const double* x) { return search.bins().owns(x); };
     std::size_t count = 0;
-    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
+    detail::generate(cfg, info, search.bins().lo, search.bins().hi, ownsX,
                      [&count](const detail::NewParticle&) { ++count; });
     detail::resizeAll(p, count);
-    search.hist.hStart.assign(count + 1, 0);
-    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
+    search.mutableHistory().hStart.assign(count + 1, 0);
+    detail::generate(cfg, info, search.bins().lo, search.bins().hi, ownsX,
                      [this](const detail::NewParticle& q) { addParticle(q); });
   }
   checkTimeStep();
@@ -210,14 +210,14 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
   const BinLayout b = dec.isTiled()
                           ? binLayout(cfg, grid, boxLayoutOf(dec).cutPlanes(), dmax, skin, total)
                           : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
-  search.bins.setup(grid, b, dec.lo(), dec.hi());
+  search.setupBins(grid, b, dec.lo(), dec.hi());
   // the particle exchange of the layout (exchange.hpp), lent the solver's state
   exchange = detail::makeExchange({.dec = dec,
                                    .comm = comm,
                                    .timers = timers,
                                    .p = p,
-                                   .hist = search.hist,
-                                   .bins = search.bins,
+                                   .hist = search.mutableHistory(),
+                                   .bins = search.bins(),
                                    .rc = rc,
                                    .where = [this] { return where(); }},
                                   b);
@@ -300,11 +300,11 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
     p.v[d][i] = q.v[d];
     p.omega[d][i] = p.f[d][i] = p.torque[d][i] = p.fExt[d][i] = 0;
   }
-  if (search.hist.hStart.size() < n + 1) {
-    ensure(search.hist.hStart, n + 1);
-    search.hist.hStart.resize(n + 1);
+  if (search.mutableHistory().hStart.size() < n + 1) {
+    ensure(search.mutableHistory().hStart, n + 1);
+    search.mutableHistory().hStart.resize(n + 1);
   }
-  search.hist.hStart[n] = search.hist.hStart[n - 1];
+  search.mutableHistory().hStart[n] = search.mutableHistory().hStart[n - 1];
 }
 
 }  // namespace coloc::dem

@@ -20,7 +20,7 @@ using namespace detail;
 // state: checkpoint/restart and re-balancing
 
 int DemSolver::Impl::ownerRank(const double* x) const {
-  return search.bins.ownerRank(dec, x);
+  return search.bins().ownerRank(dec, x);
 }
 
 namespace {
@@ -271,17 +271,18 @@ void DemSolver::Impl::restore(DemState& st) {
   }
   const std::size_t nh = row.size();
   // 3. history rows per local particle (the format migration and the list build use)
-  search.hist.hStart.assign(n + 1, 0);
-  for (std::size_t h = 0; h < nh; ++h) ++search.hist.hStart[static_cast<std::size_t>(row[h]) + 1];
-  for (std::size_t i = 0; i < n; ++i) search.hist.hStart[i + 1] += search.hist.hStart[i];
-  search.hist.hKey.assign(nh, 0.0);
-  search.hist.hS.assign(3 * nh, 0.0);
-  std::vector<int> cur(search.hist.hStart.begin(), search.hist.hStart.end() - 1);
+  HistoryPool& hist = search.mutableHistory();
+  hist.hStart.assign(n + 1, 0);
+  for (std::size_t h = 0; h < nh; ++h) ++hist.hStart[static_cast<std::size_t>(row[h]) + 1];
+  for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
+  hist.hKey.assign(nh, 0.0);
+  hist.hS.assign(3 * nh, 0.0);
+  std::vector<int> cur(hist.hStart.begin(), hist.hStart.end() - 1);
   for (std::size_t h = 0; h < nh; ++h) {
     const auto e = static_cast<std::size_t>(cur[static_cast<std::size_t>(row[h])]++);
     const double* rec = &mine[h * kHistRec];
-    search.hist.hKey[e] = static_cast<double>(historyPartner(rec));
-    std::copy_n(historyShear(rec), 3, &search.hist.hS[3 * e]);
+    hist.hKey[e] = static_cast<double>(historyPartner(rec));
+    std::copy_n(historyShear(rec), 3, &hist.hS[3 * e]);
   }
   // 4. the saving run's last rebuild, redone: at x0 the particles take the same ranks, the same
   //    (bin, id) order, ghosts and Verlet lists (so the same sums in the same order), and x0 is
@@ -291,9 +292,8 @@ void DemSolver::Impl::restore(DemState& st) {
   //    leaves f, torque and histories as saved
   checkTimeStep();
   rebuild(true);
-  search.hist.compact(
-      search.list.slot);       // the rows held every history twice (under both particles of a pair)
-  trimRows(search.hist.hKey);  // sized for those rows, now x0 (3 per particle)
+  search.compactHistory();  // the rows held every history twice (under both particles of a pair)
+  trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
   const std::function<std::string()> at = [this] { return where(); };
   for (std::size_t i = 0; i < p.nOwned && err.empty() && withX0; ++i) {
     const auto it = std::lower_bound(xNow.begin(), xNow.end(), p.id[i],
@@ -308,8 +308,8 @@ void DemSolver::Impl::restore(DemState& st) {
     // where it is now must be a place a step could have left it: inside the walls (a periodic
     // axis wraps at the next rebuild)
     for (int d = 0; d < 3 && err.empty(); ++d)
-      if (!search.bins.periodic[d] && detail::crossAxis(p, search.bins, i, d) == detail::kLost)
-        err = detail::lostMessage(p, search.bins, i, d, at());
+      if (!search.bins().periodic[d] && detail::crossAxis(p, search.bins(), i, d) == detail::kLost)
+        err = detail::lostMessage(p, search.bins(), i, d, at());
   }
   comm.raiseIfAny(err);
   if (withX0) {  // the ghosts to where their owners are now
@@ -344,19 +344,19 @@ DemState DemSolver::Impl::save() {
   const std::size_t n = p.nOwned;
   st.particles = ownedRows(p);
   for (int d = 0; d < 3; ++d) {
-    const double* x0 = search.hist.x0(d, n);
+    const double* x0 = search.history().x0(d, n);
     st.xRebuild[static_cast<std::size_t>(d)].assign(x0, x0 + n);
   }
   // every touching history under each owned particle of the pair (a restart on other ranks may
   // separate them), as seen from that particle
   for (std::size_t q = 0; q < p.size(); ++q) {
-    const auto a = static_cast<std::size_t>(search.bins.binItems[q]);
-    for (int e = search.list.rowStart[q]; e < search.list.rowStart[q + 1]; ++e) {
-      const int sl = search.list.slot[static_cast<std::size_t>(e)];
+    const auto a = static_cast<std::size_t>(search.bins().binItems[q]);
+    for (int e = search.list().rowStart[q]; e < search.list().rowStart[q + 1]; ++e) {
+      const int sl = search.list().slot[static_cast<std::size_t>(e)];
       if (sl < 0) continue;
-      const double* sh = &search.hist.hS[3 * static_cast<std::size_t>(sl)];
+      const double* sh = &search.history().hS[3 * static_cast<std::size_t>(sl)];
       if (sh[0] == 0 && sh[1] == 0 && sh[2] == 0) continue;
-      const int j = search.list.nbr[static_cast<std::size_t>(e)];
+      const int j = search.list().nbr[static_cast<std::size_t>(e)];
       if (a < n) {
         ContactHistory c;
         c.holder = p.id[a];
