@@ -67,7 +67,7 @@ void NeighbourSearch::sortByBin(ParticleStore& p) {
   ensure(scratch_, n);
   scratch_.resize(n);
   int* const perm = scratch_.data();
-  bins.sort(p, n, perm, list.nbr, list.slot, 0);  // the list is dead until its build
+  bins_.sort(p, n, perm, list_.nbr, list_.slot, 0);  // the list is dead until its build
   // applied in place, cycle by cycle (no scratch array: 16 bytes per particle less); a visited
   // position is marked by complementing its perm entry, restored after each array
   const auto apply = [&](auto& vec) {

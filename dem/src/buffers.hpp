@@ -7,20 +7,12 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <sstream>
 #include <string>
 #include <vector>
 
 namespace coloc::dem::detail {
 
 inline const char* const kAxis[3] = {"x", "y", "z"};
-
-inline std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(4);
-  os << v;
-  return os.str();
-}
 
 template <class T>
 std::size_t cap(const std::vector<T>& v) {

@@ -1,6 +1,8 @@
 // dem/src/checks.cpp — the DEM's checks of a case, callable without a solver (`coloc check`):
 // materials, faces, bins, the time step against the smallest particle of each material, and
 // overlaps of the initial particles. A DemSolver's construction runs the same functions.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -28,7 +30,7 @@ std::vector<Material> readMaterials(const Config& cfg) {
     mt.heatCapacity = m["heat_capacity"].get<double>();
     mt.conductivity = m["conductivity"].get<double>();
     if (cfg.boolean("particles.heat")) {
-      const std::string key = "particles.materials[" + std::to_string(mats.size()) + "]";
+      const std::string key = fmt::format("particles.materials[{}]", mats.size());
       if (!(mt.heatCapacity > 0))
         throw ConfigError(key + ".heat_capacity",
                           "required (> 0, J/(kg K)) when particles.heat is true");
@@ -40,8 +42,7 @@ std::vector<Material> readMaterials(const Config& cfg) {
   }
   const auto n = static_cast<long long>(mats.size());
   if (n > 0 && cfg.integer("particles.wall_material") >= n)
-    throw ConfigError("particles.wall_material",
-                      "no such material (" + std::to_string(n) + " declared)");
+    throw ConfigError("particles.wall_material", fmt::format("no such material ({} declared)", n));
   return mats;
 }
 
@@ -74,7 +75,7 @@ FaceKinds faceKinds(const Config& cfg, const GlobalGrid& grid,
   for (std::size_t n = 0; n < inflow.size(); ++n) {
     const auto& f = inflow[n];
     if (face[f.axis][f.side] == Face::Outflow)
-      throw ConfigError("particles.inflow[" + std::to_string(n) + "].face",
+      throw ConfigError(fmt::format("particles.inflow[{}].face", n),
                         std::string("the face ") + names[f.axis][f.side] +
                             " is an outflow face (particles.boundary): the particles would "
                             "leave as they enter");
@@ -83,8 +84,8 @@ FaceKinds faceKinds(const Config& cfg, const GlobalGrid& grid,
       if (g.axis == f.axis && g.side == f.side && f.pmin[0] < g.pmax[0] && g.pmin[0] < f.pmax[0] &&
           f.pmin[1] < g.pmax[1] && g.pmin[1] < f.pmax[1])
         throw ConfigError(
-            "particles.inflow[" + std::to_string(n) + "].patch",
-            "overlaps the patch of particles.inflow[" + std::to_string(m) + "] on the same face");
+            fmt::format("particles.inflow[{}].patch", n),
+            fmt::format("overlaps the patch of particles.inflow[{}] on the same face", m));
     }
   }
   return face;
@@ -114,10 +115,10 @@ void checkTimeStep(const TimeStepInput& in) {
   if (!std::isfinite(tLim)) return;
   if (in.dt > in.fraction * tLim) {
     const char* what = in.model == Model::HertzMindlin ? "Rayleigh time" : "linear collision time";
-    throw ConfigError("particles.dt", "time step " + fmt(in.dt) + " s is above " +
-                                          fmt(in.fraction) + " of the " + what + " " + fmt(tLim) +
-                                          " s of the smallest particle: use at most " +
-                                          fmt(in.fraction * tLim) + " s");
+    throw ConfigError("particles.dt",
+                      fmt::format("time step {:.4g} s is above {:.4g} of the {} {:.4g} s of the "
+                                  "smallest particle: use at most {:.4g} s",
+                                  in.dt, in.fraction, what, tLim, in.fraction * tLim));
   }
 }
 
@@ -213,12 +214,12 @@ void checkOverlaps(const Config& cfg, const GlobalGrid& grid, const CaseParticle
         }
   }
   if (worst > limitFrac)
-    throw Error(
-        "particle " + std::to_string(worstId) + " overlaps " +
-        (worstPartner < 0 ? std::string("a wall") : "particle " + std::to_string(worstPartner)) +
-        " by " + fmt(worst) + " of the smaller radius where the case places them " +
-        "(limit particles.overlap_limit = " + fmt(limitFrac) +
-        "): move the particles apart or shrink them");
+    throw Error(fmt::format(
+        "particle {} overlaps {} by {:.4g} of the smaller radius where the case places them "
+        "(limit particles.overlap_limit = {:.4g}): move the particles apart or shrink them",
+        worstId,
+        worstPartner < 0 ? std::string("a wall") : fmt::format("particle {}", worstPartner), worst,
+        limitFrac));
 }
 
 }  // namespace

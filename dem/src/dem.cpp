@@ -29,6 +29,8 @@
 // cell edges (a bin is k cells or 1/k cell), so block edges are bin edges.
 #include "coloc/dem/dem.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -68,8 +70,7 @@ void DemSolver::Impl::advanceClock() {
 }
 
 std::string DemSolver::Impl::where() const {
-  return " on rank " + std::to_string(dec.rank()) + " at step " + std::to_string(steps) +
-         ", t = " + fmt(time) + " s";
+  return fmt::format(" on rank {} at step {}, t = {:.4g} s", dec.rank(), steps, time);
 }
 
 void DemSolver::Impl::checkOverlap(double globalMax) {
@@ -77,12 +78,14 @@ void DemSolver::Impl::checkOverlap(double globalMax) {
   std::string msg;
   const ContactTally& t = forces.tally();
   if (t.maxOverlap > overlapLimit) {
-    msg = "particle " + std::to_string(t.maxOverlapId) + " overlaps " +
-          (t.maxOverlapPartner < 0 ? std::string("a wall")
-                                   : "particle " + std::to_string(t.maxOverlapPartner)) +
-          " by " + fmt(t.maxOverlap) + " of the smaller radius" + where() +
-          " (limit particles.overlap_limit = " + fmt(overlapLimit) +
-          "): reduce particles.dt, the velocities, or stiffen the material";
+    msg = fmt::format(
+        "particle {} overlaps {} by {:.4g} of the smaller radius{} (limit "
+        "particles.overlap_limit = {:.4g}): reduce particles.dt, the velocities, or stiffen the "
+        "material",
+        t.maxOverlapId,
+        t.maxOverlapPartner < 0 ? std::string("a wall")
+                                : fmt::format("particle {}", t.maxOverlapPartner),
+        t.maxOverlap, where(), overlapLimit);
   }
   comm.raiseIfAny(msg);
 }
@@ -202,7 +205,7 @@ double DemSolver::skin() const {
   return impl_->skin;
 }
 std::array<double, 3> DemSolver::binSize() const {
-  return impl_->search.bins.bs;
+  return impl_->search.bins().bs;
 }
 long long DemSolver::rebuildCount() const {
   return impl_->rebuilds;
@@ -223,7 +226,7 @@ Json DemSolver::diagnostics() const {
                    static_cast<double>(m.forces.tally().contacts),
                    static_cast<double>(m.forces.tally().walls),
                    static_cast<double>(m.p.nGhost),
-                   static_cast<double>(m.search.list.nbr.size()),
+                   static_cast<double>(m.search.list().nbr.size()),
                    static_cast<double>(m.memory())};
   m.comm.sumInPlace(std::span<double>(loc, 6));
   const double n = std::max(1.0, loc[0]);
@@ -247,7 +250,7 @@ Json DemSolver::diagnostics() const {
   }
   j["interaction_range"] = m.rc;
   j["skin"] = m.skin;
-  j["bin_size"] = {m.search.bins.bs[0], m.search.bins.bs[1], m.search.bins.bs[2]};
+  j["bin_size"] = {m.search.bins().bs[0], m.search.bins().bs[1], m.search.bins().bs[2]};
   j["dt"] = m.integrator.dt;
   j["frozen"] = m.frozen;
   // flow: mass in (initial + inflow) = mass out (outflow faces) + mass held

@@ -3,6 +3,8 @@
 // table, then the particle's contact-history rows).
 #include "exchange.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -37,15 +39,19 @@ std::string lostMessage(const ParticleStore& p, const Bins& bins, std::size_t i,
                         const std::string& where) {
   const double x = p.x[d][i];
   if (!std::isfinite(x) || !std::isfinite(p.v[d][i]) || !std::isfinite(p.omega[d][i]))
-    return "particle " + std::to_string(p.id[i]) + " has a non-finite " +
-           (!std::isfinite(x)           ? "position"
-            : !std::isfinite(p.v[d][i]) ? "velocity"
-                                        : "angular velocity") +
-           where + ": the run blew up (time step too large, or a NaN in the forces)";
-  return "particle " + std::to_string(p.id[i]) + " left the box through the " +
-         (x < bins.origin[d] ? "low " : "high ") + kAxis[d] + " face" + where +
-         " (x = " + fmt(p.x[0][i]) + ", " + fmt(p.x[1][i]) + ", " + fmt(p.x[2][i]) +
-         "): too fast for the walls, or walls are off";
+    return fmt::format(
+        "particle {} has a non-finite {}{}: the run blew up (time step too large, or a NaN in "
+        "the forces)",
+        p.id[i],
+        !std::isfinite(x)           ? "position"
+        : !std::isfinite(p.v[d][i]) ? "velocity"
+                                    : "angular velocity",
+        where);
+  return fmt::format(
+      "particle {} left the box through the {}{} face{} (x = {:.4g}, {:.4g}, {:.4g}): too fast "
+      "for the walls, or walls are off",
+      p.id[i], x < bins.origin[d] ? "low " : "high ", kAxis[d], where, p.x[0][i], p.x[1][i],
+      p.x[2][i]);
 }
 
 void ParticleExchange::packMigrant(std::size_t i, std::size_t W, std::span<double> out) const {

@@ -6,6 +6,8 @@
 // the image's period: on a process grid that is the set of ghosts the staged sweeps deliver
 // (faces, edges, corners). The plan of the build is reused by the updates (same rows, same order)
 // until the next rebuild.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -128,10 +130,11 @@ void TiledExchange::migrate() {
     int to = lost || bins.owns(x) ? me : bins.ownerRank(c_.dec, x);
     if (to != me && !std::binary_search(near_.begin(), near_.end(), to)) {
       fail([&] {
-        return "particle " + std::to_string(p.id[i]) + " moved beyond the boxes next to rank " +
-               std::to_string(me) + "'s between two neighbour rebuilds" + c_.where() +
-               " (x = " + fmt(x[0]) + ", " + fmt(x[1]) + ", " + fmt(x[2]) +
-               "): the run blew up (time step too large, or a NaN in the forces)";
+        return fmt::format(
+            "particle {} moved beyond the boxes next to rank {}'s between two neighbour "
+            "rebuilds{} (x = {:.4g}, {:.4g}, {:.4g}): the run blew up (time step too large, or "
+            "a NaN in the forces)",
+            p.id[i], me, c_.where(), x[0], x[1], x[2]);
       });
       to = me;
     }

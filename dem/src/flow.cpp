@@ -26,11 +26,11 @@ void DemSolver::Impl::setupFaces(const Config& cfg) {
 bool DemSolver::Impl::beyondOutflow(std::size_t i, int* which) const {
   for (int d = 0; d < 3; ++d) {
     const double x = p.x[d][i];
-    if (face[d][0] == Face::Outflow && x < search.bins.origin[d]) {
+    if (face[d][0] == Face::Outflow && x < search.bins().origin[d]) {
       if (which) *which = 2 * d;
       return true;
     }
-    if (face[d][1] == Face::Outflow && x > search.bins.origin[d] + search.bins.L[d]) {
+    if (face[d][1] == Face::Outflow && x > search.bins().origin[d] + search.bins().L[d]) {
       if (which) *which = 2 * d + 1;
       return true;
     }
@@ -46,7 +46,7 @@ void DemSolver::Impl::removeOutflow() {
   std::size_t w = 0;
   int hw = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const int h0 = search.hist.hStart[i], h1 = search.hist.hStart[i + 1];
+    const int h0 = search.history().hStart[i], h1 = search.history().hStart[i + 1];
     int fc = 0;
     if (beyondOutflow(i, &fc)) {
       ++flow.countOut;
@@ -61,7 +61,7 @@ void DemSolver::Impl::removeOutflow() {
   if (w == n) return;
   p.nOwned = w;
   p.nGhost = 0;
-  search.hist.truncate(w, hw);
+  search.mutableHistory().truncate(w, hw);
 }
 
 void DemSolver::Impl::insertInflow() {
@@ -120,8 +120,8 @@ void DemSolver::Impl::insertInflow() {
       q.x[ab[k]] =
           f.pmin[k] + (static_cast<double>(ij[k]) + 0.5) * f.s +
           free * (2.0 * detail::uniform01(seed, uid, stream + static_cast<std::uint64_t>(k)) - 1.0);
-    q.x[f.axis] = f.side == 0 ? search.bins.origin[f.axis] + 0.5 * f.s
-                              : search.bins.origin[f.axis] + search.bins.L[f.axis] - 0.5 * f.s;
+    q.x[f.axis] = f.side == 0 ? search.bins().origin[f.axis] + 0.5 * f.s
+                              : search.bins().origin[f.axis] + search.bins().L[f.axis] - 0.5 * f.s;
     for (int d = 0; d < 3; ++d) {
       q.v[d] = f.v[static_cast<std::size_t>(d)];
       if (f.spread > 0)
@@ -132,17 +132,17 @@ void DemSolver::Impl::insertInflow() {
   const auto overlaps = [&](const detail::NewParticle& q) {
     int b[3];
     for (int d = 0; d < 3; ++d)
-      b[d] = static_cast<int>(std::clamp(search.bins.gbinRaw(q.x[d], d) - search.bins.binLo[d], 0LL,
-                                         static_cast<long long>(search.bins.nb[d] - 1))) +
+      b[d] = static_cast<int>(std::clamp(search.bins().gbinRaw(q.x[d], d) - search.bins().binLo[d],
+                                         0LL, static_cast<long long>(search.bins().nb[d] - 1))) +
              1;
     for (int z = b[2] - 1; z <= b[2] + 1; ++z)
       for (int y = b[1] - 1; y <= b[1] + 1; ++y)
         for (int x = b[0] - 1; x <= b[0] + 1; ++x) {
           const auto bin =
-              static_cast<std::size_t>(x + search.bins.nbx[0] * (y + search.bins.nbx[1] * z));
-          for (int e = search.bins.binStart[bin]; e < search.bins.binStart[bin + 1]; ++e) {
+              static_cast<std::size_t>(x + search.bins().nbx[0] * (y + search.bins().nbx[1] * z));
+          for (int e = search.bins().binStart[bin]; e < search.bins().binStart[bin + 1]; ++e) {
             const auto i =
-                static_cast<std::size_t>(search.bins.binItems[static_cast<std::size_t>(e)]);
+                static_cast<std::size_t>(search.bins().binItems[static_cast<std::size_t>(e)]);
             double r2 = 0;
             for (int d = 0; d < 3; ++d) r2 += (p.x[d][i] - q.x[d]) * (p.x[d][i] - q.x[d]);
             const double rs = p.radius[i] + q.radius;
@@ -160,7 +160,7 @@ void DemSolver::Impl::insertInflow() {
         std::min(static_cast<long long>(flow.waiting[n].size()), inflow[n].na * inflow[n].nb);
     for (long long j = 0; j < m; ++j, ++c) {
       candidate(n, j, q);
-      if (search.bins.owns(q.x) && overlaps(q)) inScr[c] = 1;
+      if (search.bins().owns(q.x) && overlaps(q)) inScr[c] = 1;
     }
   }
   comm.maxInPlace(std::span<int>(inScr.data(), total));
@@ -182,7 +182,7 @@ void DemSolver::Impl::insertInflow() {
       ++flow.inserted[n];
       ++flow.countIn;
       forceRebuild = true;
-      if (search.bins.owns(q.x)) {
+      if (search.bins().owns(q.x)) {
         ensure(incoming, incoming.size() + 1);
         incoming.push_back(q);
       }

@@ -65,12 +65,12 @@ class ForcePass {
         B_(B),
         mat_(fi.p.material.data()),
         id_(fi.p.id.data()),
-        nbrs_(fi.search.list.nbr.data()),
-        sl_(fi.search.list.slot.data()),
-        rowStart_(fi.search.list.rowStart.data()),
-        items_(fi.search.bins.binItems.data()),
-        bins_(fi.search.bins),
-        hist_(fi.search.hist),
+        nbrs_(fi.search.list().nbr.data()),
+        sl_(fi.search.listSlots()),
+        rowStart_(fi.search.list().rowStart.data()),
+        items_(fi.search.bins().binItems.data()),
+        bins_(fi.search.bins()),
+        hist_(fi.search.mutableHistory()),
         wallC_(law.wall.data()),
         nMat_(law.nMat),
         single_(law.nMat == 1),
@@ -78,7 +78,7 @@ class ForcePass {
         update_(update),
         in_{B,
             {fi.p.omega[0].data(), fi.p.omega[1].data(), fi.p.omega[2].data()},
-            fi.search.hist.hS.data(),
+            fi.search.mutableHistory().hS.data(),
             law.pair.data(),
             fi.dt},
         ch_(ch) {}
@@ -313,11 +313,13 @@ double DemSolver::contactEnergy() const {
   const auto& m = *impl_;
   const auto& p = m.p;
   const std::size_t n = p.nOwned;
+  const detail::Bins& bins = m.search.bins();
+  const detail::NeighbourList& list = m.search.list();
   double e = 0;
   for (std::size_t q = 0; q < p.size(); ++q) {
-    const auto i = static_cast<std::size_t>(m.search.bins.binItems[q]);
-    for (int k = m.search.list.rowStart[q]; k < m.search.list.rowStart[q + 1]; ++k) {
-      const int j = m.search.list.nbr[static_cast<std::size_t>(k)];
+    const auto i = static_cast<std::size_t>(bins.binItems[q]);
+    for (int k = list.rowStart[q]; k < list.rowStart[q + 1]; ++k) {
+      const int j = list.nbr[static_cast<std::size_t>(k)];
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);
         double r2 = 0;
@@ -333,8 +335,8 @@ double DemSolver::contactEnergy() const {
                                           p.radius[i] * p.radius[u] / rs);
       } else {
         const int w = -1 - j, d = w / 2, s = w % 2;
-        const double dist = s == 0 ? p.x[d][i] - m.search.bins.origin[d]
-                                   : m.search.bins.origin[d] + m.search.bins.L[d] - p.x[d][i];
+        const double dist =
+            s == 0 ? p.x[d][i] - bins.origin[d] : bins.origin[d] + bins.L[d] - p.x[d][i];
         const double delta = p.radius[i] - dist;
         if (delta > 0)
           e += detail::normalEnergy(m.forces.law.model,

@@ -1,5 +1,7 @@
 #include "generate.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,7 +13,7 @@ namespace coloc::dem::detail {
 namespace {
 
 std::string srcPath(std::size_t i) {
-  return "particles.sources[" + std::to_string(i) + "]";
+  return fmt::format("particles.sources[{}]", i);
 }
 
 std::array<double, 3> vec(const Json& j) {
@@ -22,8 +24,8 @@ void checkInside(const GlobalGrid& g, const std::array<double, 3>& p, const std:
   for (int d = 0; d < 3; ++d) {
     const double lo = g.origin[d], hi = g.origin[d] + g.length[d];
     if (!(p[d] >= lo && p[d] <= hi))
-      throw ConfigError(key, "point (" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " +
-                                 std::to_string(p[2]) + ") lies outside the box");
+      throw ConfigError(
+          key, fmt::format("point ({:f}, {:f}, {:f}) lies outside the box", p[0], p[1], p[2]));
   }
 }
 
@@ -44,8 +46,9 @@ SiteGrid siteGrid(const Json& src, double edge, const std::string& key) {
     if (!(len > 0)) throw ConfigError(key + ".hi", "must be above lo along every axis");
     g.n[d] = static_cast<long long>(std::floor(len / edge * (1 + 1e-12)));
     if (g.n[d] < 1)
-      throw ConfigError(key, "the region is thinner than one particle site (" +
-                                 std::to_string(edge) + " m) along an axis");
+      throw ConfigError(
+          key,
+          fmt::format("the region is thinner than one particle site ({:f} m) along an axis", edge));
   }
   return g;
 }
@@ -194,7 +197,7 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
   const auto& list = cfg.at("particles.inflow");
   for (std::size_t i = 0; i < list.size(); ++i) {
     const auto& src = list[i];
-    const std::string key = "particles.inflow[" + std::to_string(i) + "]";
+    const std::string key = fmt::format("particles.inflow[{}]", i);
     InflowInfo f;
     const std::string face = src["face"].get<std::string>();
     f.axis = face[0] - 'x';
@@ -205,8 +208,9 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
       throw ConfigError(key + ".face", "face " + face + " lies on a periodic axis");
     f.material = static_cast<int>(src["material"].get<long long>());
     if (f.material >= nMaterials)
-      throw ConfigError(key + ".material", "no such material (" + std::to_string(nMaterials) +
-                                               " declared in particles.materials)");
+      throw ConfigError(
+          key + ".material",
+          fmt::format("no such material ({} declared in particles.materials)", nMaterials));
     f.size = sizeDistribution(src, key);
     f.rate = src["rate"].get<double>();
     f.massRate = src["mass_rate"].get<double>();
@@ -240,8 +244,8 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
     f.na = static_cast<long long>(std::floor((f.pmax[0] - f.pmin[0]) / f.s * (1 + 1e-12)));
     f.nb = static_cast<long long>(std::floor((f.pmax[1] - f.pmin[1]) / f.s * (1 + 1e-12)));
     if (f.na < 1 || f.nb < 1)
-      throw ConfigError(key + ".patch", "the patch is narrower than one insertion site (" +
-                                            std::to_string(f.s) + " m)");
+      throw ConfigError(key + ".patch",
+                        fmt::format("the patch is narrower than one insertion site ({:f} m)", f.s));
     if (f.s > grid.length[f.axis])
       throw ConfigError(key + ".face", "the box is thinner than one insertion site");
     out.push_back(f);
@@ -258,8 +262,9 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
     const std::string type = src["type"].get<std::string>();
     SourceInfo info;
     if (src["material"].get<long long>() >= nMaterials)
-      throw ConfigError(key + ".material", "no such material (" + std::to_string(nMaterials) +
-                                               " declared in particles.materials)");
+      throw ConfigError(
+          key + ".material",
+          fmt::format("no such material ({} declared in particles.materials)", nMaterials));
     if (type == "list") {
       const auto& pos = src["positions"];
       if (pos.size() % 3 != 0)
@@ -319,11 +324,10 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
       checkInside(grid, vec(src["hi"]), key + ".hi");
       const auto sg = siteGrid(src, 2 * info.rmax * (1 + src["gap"].get<double>()), key);
       if (info.count > sg.total())
-        throw ConfigError(key + ".count", std::to_string(info.count) +
-                                              " particles do not fit: "
-                                              "the region holds " +
-                                              std::to_string(sg.total()) +
-                                              " sites at this radius and gap");
+        throw ConfigError(key + ".count",
+                          fmt::format("{} particles do not fit: the region holds {} sites at "
+                                      "this radius and gap",
+                                      info.count, sg.total()));
     }
     out.push_back(info);
   }

@@ -2,6 +2,8 @@
 // its stability check (HeatTransfer, heat.hpp).
 #include "heat.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -48,9 +50,9 @@ void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {
   const double *X0 = p.x[0].data(), *X1 = p.x[1].data(), *X2 = p.x[2].data();
   const double* R = p.radius.data();
   const int* mat = p.material.data();
-  const int* nbr = s.list.nbr.data();
-  const int* rowStart = s.list.rowStart.data();
-  const int* items = s.bins.binItems.data();
+  const int* nbr = s.list().nbr.data();
+  const int* rowStart = s.list().rowStart.data();
+  const int* items = s.bins().binItems.data();
   const bool walls = wallT > 0;
   double wallRate = 0;
   for (std::size_t q = 0; q < nAll; ++q) {
@@ -76,7 +78,7 @@ void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {
       } else if (walls) {
         const int w = -1 - j, d = w / 2, sd = w % 2;
         const double dist =
-            sd == 0 ? xi[d] - s.bins.origin[d] : s.bins.origin[d] + s.bins.L[d] - xi[d];
+            sd == 0 ? xi[d] - s.bins().origin[d] : s.bins().origin[d] + s.bins().L[d] - xi[d];
         const double delta = ri - dist;
         if (!(delta > 0)) continue;
         const double a = std::sqrt(ri * delta);
@@ -121,11 +123,12 @@ void HeatTransfer::checkTimeStep(double dt, double overlapLimit, const std::vect
     const double limit = kStableFraction * C / H;
     if (dt > limit)
       throw ConfigError("particles.dt",
-                        "particles.dt = " + fmt(dt) + " s is above " + fmt(kStableFraction) +
-                            " m c_p / H = " + fmt(limit) + " s, the explicit limit of the " +
-                            "temperature update for the smallest particle of material " +
-                            std::to_string(a) + " at the overlap limit (H = 2 k_eff a, a = " +
-                            "sqrt(R* delta)): lower particles.dt, or raise heat_capacity");
+                        fmt::format("particles.dt = {:.4g} s is above {:.4g} m c_p / H = {:.4g} "
+                                    "s, the explicit limit of the temperature update for the "
+                                    "smallest particle of material {} at the overlap limit (H = "
+                                    "2 k_eff a, a = sqrt(R* delta)): lower particles.dt, or raise "
+                                    "heat_capacity",
+                                    dt, kStableFraction, limit, a));
   }
 }
 

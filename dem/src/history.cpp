@@ -50,7 +50,7 @@ void detail::keepRow(ParticleStore& p, HistoryPool& hist, std::size_t i, std::si
 }
 
 void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int& hw) {
-  detail::keepRow(p, search.hist, i, w, h0, h1, hw);
+  detail::keepRow(p, search.mutableHistory(), i, w, h0, h1, hw);
 }
 
 void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks) {
@@ -72,49 +72,49 @@ void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& d
     int wrap = 0;
     for (int d = 0, w = 1; d < 3; ++d, w *= 3) {
       x[d] = p.x[d][i];
-      if (bins.periodic[d]) {
-        if (x[d] < bins.origin[d]) {
-          x[d] += bins.L[d];
+      if (bins_.periodic[d]) {
+        if (x[d] < bins_.origin[d]) {
+          x[d] += bins_.L[d];
           wrap += w;
-        } else if (x[d] >= bins.origin[d] + bins.L[d]) {
-          x[d] -= bins.L[d];
+        } else if (x[d] >= bins_.origin[d] + bins_.L[d]) {
+          x[d] -= bins_.L[d];
           wrap += 2 * w;
         }
       }
     }
-    code[i] = (nRanks > 1 ? bins.ownerRank(dec, x) * 27 : 0) + wrap;
+    code[i] = (nRanks > 1 ? bins_.ownerRank(dec, x) * 27 : 0) + wrap;
   }
   const auto dup = [&](std::size_t a, int j) {
     return a < n && j >= 0 && static_cast<std::size_t>(j) < n &&
            code[a] != code[static_cast<std::size_t>(j)];
   };
   // pass 1: rows per particle; slots of zero histories are dropped
-  ensure(hist.hStart, n + 1);
-  hist.hStart.assign(n + 1, 0);
+  ensure(hist_.hStart, n + 1);
+  hist_.hStart.assign(n + 1, 0);
   for (std::size_t q = 0; q < nAll; ++q) {
-    const auto a = static_cast<std::size_t>(bins.binItems[q]);
-    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
-      const int s = list.slot[static_cast<std::size_t>(e)];
+    const auto a = static_cast<std::size_t>(bins_.binItems[q]);
+    for (int e = list_.rowStart[q]; e < list_.rowStart[q + 1]; ++e) {
+      const int s = list_.slot[static_cast<std::size_t>(e)];
       if (s < 0) continue;
-      const double* v = &hist.hS[3 * static_cast<std::size_t>(s)];
+      const double* v = &hist_.hS[3 * static_cast<std::size_t>(s)];
       if (v[0] == 0 && v[1] == 0 && v[2] == 0) {
-        list.slot[static_cast<std::size_t>(e)] = -1;
+        list_.slot[static_cast<std::size_t>(e)] = -1;
         continue;
       }
-      const int j = list.nbr[static_cast<std::size_t>(e)];
-      ++hist.hStart[(a < n ? a : static_cast<std::size_t>(j)) + 1];
-      if (dup(a, j)) ++hist.hStart[static_cast<std::size_t>(j) + 1];
+      const int j = list_.nbr[static_cast<std::size_t>(e)];
+      ++hist_.hStart[(a < n ? a : static_cast<std::size_t>(j)) + 1];
+      if (dup(a, j)) ++hist_.hStart[static_cast<std::size_t>(j) + 1];
     }
   }
-  for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
-  const auto T = static_cast<std::size_t>(hist.hStart[n]);
-  const std::size_t M = std::max(T, hist.slots());
+  for (std::size_t i = 0; i < n; ++i) hist_.hStart[i + 1] += hist_.hStart[i];
+  const auto T = static_cast<std::size_t>(hist_.hStart[n]);
+  const std::size_t M = std::max(T, hist_.slots());
   // the keys' array held x0 until now (the rebuild check is done)
-  std::vector<double>& key = hist.hKey;
+  std::vector<double>& key = hist_.hKey;
   ensure(key, M);
   key.resize(M);
-  ensure(hist.hS, 3 * M);
-  hist.hS.resize(3 * M);
+  ensure(hist_.hS, 3 * M);
+  hist_.hS.resize(3 * M);
   // target position of every pool slot (live ones to their row, the others to the free rows),
   // kept in the keys' array, which pass 2 overwrites with the keys: bits 0-31 the target, bit 32
   // "position taken", bit 33 "moved" (integers below 2^34, exact in the doubles)
@@ -126,13 +126,13 @@ void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& d
     put(s, (get(s) & ~kNone) | static_cast<std::int64_t>(pos));
     put(pos, get(pos) | kTakenPos);
   };
-  std::copy(hist.hStart.begin(), hist.hStart.end() - 1, cur);
+  std::copy(hist_.hStart.begin(), hist_.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
-    const auto a = static_cast<std::size_t>(bins.binItems[q]);
-    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
-      const int s = list.slot[static_cast<std::size_t>(e)];
+    const auto a = static_cast<std::size_t>(bins_.binItems[q]);
+    for (int e = list_.rowStart[q]; e < list_.rowStart[q + 1]; ++e) {
+      const int s = list_.slot[static_cast<std::size_t>(e)];
       if (s < 0) continue;
-      const int j = list.nbr[static_cast<std::size_t>(e)];
+      const int j = list_.nbr[static_cast<std::size_t>(e)];
       const int pos = cur[a < n ? a : static_cast<std::size_t>(j)]++;
       if (dup(a, j)) ++cur[static_cast<std::size_t>(j)];
       setTarget(static_cast<std::size_t>(s), static_cast<std::size_t>(pos));
@@ -145,25 +145,25 @@ void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& d
   }
   for (std::size_t s = 0; s < M; ++s) {  // move slot s to its target, cycle by cycle
     if (get(s) & kMoved) continue;
-    double v[3] = {hist.hS[3 * s], hist.hS[3 * s + 1], hist.hS[3 * s + 2]};
+    double v[3] = {hist_.hS[3 * s], hist_.hS[3 * s + 1], hist_.hS[3 * s + 2]};
     std::size_t k = s;
     for (;;) {
       const auto t = static_cast<std::size_t>(get(k) & kNone);
       put(k, get(k) | kMoved);
-      for (int c = 0; c < 3; ++c) std::swap(v[c], hist.hS[3 * t + static_cast<std::size_t>(c)]);
+      for (int c = 0; c < 3; ++c) std::swap(v[c], hist_.hS[3 * t + static_cast<std::size_t>(c)]);
       if (t == s) break;
       k = t;
     }
   }
   // pass 2: keys, orientation, second copies
-  std::copy(hist.hStart.begin(), hist.hStart.end() - 1, cur);
+  std::copy(hist_.hStart.begin(), hist_.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
-    const auto a = static_cast<std::size_t>(bins.binItems[q]);
-    for (int e = list.rowStart[q]; e < list.rowStart[q + 1]; ++e) {
-      if (list.slot[static_cast<std::size_t>(e)] < 0) continue;
-      const int j = list.nbr[static_cast<std::size_t>(e)];
+    const auto a = static_cast<std::size_t>(bins_.binItems[q]);
+    for (int e = list_.rowStart[q]; e < list_.rowStart[q + 1]; ++e) {
+      if (list_.slot[static_cast<std::size_t>(e)] < 0) continue;
+      const int j = list_.nbr[static_cast<std::size_t>(e)];
       double* v =
-          &hist.hS[3 * static_cast<std::size_t>(cur[a < n ? a : static_cast<std::size_t>(j)])];
+          &hist_.hS[3 * static_cast<std::size_t>(cur[a < n ? a : static_cast<std::size_t>(j)])];
       if (a < n) {
         key[static_cast<std::size_t>(cur[a]++)] =
             static_cast<double>(j >= 0 ? p.id[static_cast<std::size_t>(j)] : j);
@@ -175,13 +175,13 @@ void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& d
       if (dup(a, j)) {
         const auto r = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
         key[r] = static_cast<double>(p.id[a]);
-        for (int c = 0; c < 3; ++c) hist.hS[3 * r + static_cast<std::size_t>(c)] = -v[c];
+        for (int c = 0; c < 3; ++c) hist_.hS[3 * r + static_cast<std::size_t>(c)] = -v[c];
       }
     }
   }
   key.resize(T);
-  hist.hS.resize(3 * T);
-  hist.freeSlots.clear();
+  hist_.hS.resize(3 * T);
+  hist_.freeSlots.clear();
 }
 
 }  // namespace coloc::dem

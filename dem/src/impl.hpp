@@ -141,14 +141,14 @@ struct DemSolver::Impl {
   template <class F>
   void memoryParts(F&& f) const {
     f("fields", detail::columnBytes(p));
-    f("bins", search.bins.bytes());
-    f("list.rows", detail::cap(search.list.rowStart));
-    f("list.nbr", detail::cap(search.list.nbr));
-    f("list.slot", detail::cap(search.list.slot));
-    f("hist.rows", detail::cap(search.hist.hStart));
-    f("hist.key_x0", detail::cap(search.hist.hKey));
-    f("hist.shear", detail::cap(search.hist.hS));
-    f("hist.free", detail::cap(search.hist.freeSlots));
+    f("bins", search.bins().bytes());
+    f("list.rows", detail::cap(search.list().rowStart));
+    f("list.nbr", detail::cap(search.list().nbr));
+    f("list.slot", detail::cap(search.list().slot));
+    f("hist.rows", detail::cap(search.history().hStart));
+    f("hist.key_x0", detail::cap(search.history().hKey));
+    f("hist.shear", detail::cap(search.history().hS));
+    f("hist.free", detail::cap(search.history().freeSlots));
     f("ghosts", exchange ? exchange->bytes() : 0);
     f("scratch", detail::cap(inScr) + search.scratchBytes());
     f("body", forces.bodyBytes());

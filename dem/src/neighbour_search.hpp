@@ -26,9 +26,25 @@ using WallMask = std::array<std::array<bool, 2>, 3>;
 
 class NeighbourSearch {
  public:
-  Bins bins;
-  NeighbourList list;
-  HistoryPool hist;
+  const Bins& bins() const { return bins_; }
+  const NeighbourList& list() const { return list_; }
+  const HistoryPool& history() const { return hist_; }
+
+  /// The bins of the block for layout `b` (set-up, once the decomposition is known).
+  void setupBins(const GlobalGrid& grid, const BinLayout& b, const Int3& cellLo,
+                 const Int3& cellHi) {
+    bins_.setup(grid, b, cellLo, cellHi);
+  }
+  /// The contact-history pool, writable: its rows are written by the owner outside the rebuild
+  /// (set-up and restore, outflow removal, migration through the particle exchange) and its
+  /// slots taken, freed and updated by the force pass.
+  HistoryPool& mutableHistory() { return hist_; }
+  /// The history slot of each list entry (list order), writable: the force pass takes a slot
+  /// when a contact starts and frees it when it ends.
+  int* listSlots() { return list_.slot.data(); }
+  /// The history pool reduced to the slots the list holds (restore: the rows held every
+  /// history twice, under both particles of a pair).
+  void compactHistory() { hist_.compact(list_.slot); }
 
   /// The history pool becomes rows per owned particle of `p` (the format migration carries and
   /// the list build reads), keyed by the partner's global id (walls: -1..-6); `dec`, `nRanks`:
@@ -50,6 +66,9 @@ class NeighbourSearch {
   std::size_t scratchBytes() const { return cap(scratch_); }
 
  private:
+  Bins bins_;
+  NeighbourList list_;
+  HistoryPool hist_;
   // sortByBin to the end of buildLists: the (bin, id) re-sort's permutation (scratch_[k]: the
   // history row of particle k); in packHistory: destination codes, then row cursors
   std::vector<int> scratch_;

@@ -18,21 +18,21 @@ void NeighbourSearch::buildLists(const ParticleStore& p, double skin, const Wall
   const int* const perm = scratch_.data();  // sortByBin's
   // every local particle in (bin, id) order (owned clamped into the block, ghosts into the
   // ghost layer; the owned ones are in that order already)
-  ensure(bins.binItems, nAll);
-  bins.binItems.resize(nAll);
+  ensure(bins_.binItems, nAll);
+  bins_.binItems.resize(nAll);
   // the list's arrays as the sort's scratch (rebuilt below)
-  bins.sort(p, nAll, bins.binItems.data(), list.nbr, list.slot, static_cast<int>(n));
-  // Half list. binItems is every local particle in (bin, id) order: the canonical key K (the
+  bins_.sort(p, nAll, bins_.binItems.data(), list_.nbr, list_.slot, static_cast<int>(n));
+  // Half list_. binItems is every local particle in (bin, id) order: the canonical key K (the
   // bin's (z, y, x) position, unwrapped across periodic faces, then the global id) orders the
   // holders the same way at any rank count. The row of holder a lists the partners b with
   // K_b > K_a: the rest of a's bin, then the 13 forward stencil bins in increasing index, each
   // in increasing id; at least one of a, b is owned (ghost holders list owned partners only).
   // Walls close the rows of owned particles.
-  ensure(list.rowStart, nAll + 1);
-  list.rowStart.resize(nAll + 1);
-  list.nbr.clear();
-  list.slot.clear();
-  const int sy = bins.nbx[0], sz = bins.nbx[0] * bins.nbx[1];
+  ensure(list_.rowStart, nAll + 1);
+  list_.rowStart.resize(nAll + 1);
+  list_.nbr.clear();
+  list_.slot.clear();
+  const int sy = bins_.nbx[0], sz = bins_.nbx[0] * bins_.nbx[1];
   int fwd[13][3], nf = 0;
   for (int dz = 0; dz <= 1; ++dz)
     for (int dy = dz == 0 ? 0 : -1; dy <= 1; ++dy)
@@ -50,79 +50,80 @@ void NeighbourSearch::buildLists(const ParticleStore& p, double skin, const Wall
   // the row of b keyed by a's id, negated in place; the entry takes that row as its pool slot
   // (rows are in pre-sort order: row perm[i] for particle i; a taken row's key is cleared)
   constexpr double kTaken = -std::numeric_limits<double>::infinity();
-  double* key = hist.hKey.data();
+  double* key = hist_.hKey.data();
   const auto lookup = [&](std::size_t a, int b) {
     if (a < n) {
       const auto h = static_cast<std::size_t>(perm[a]);
       const double want = static_cast<double>(b >= 0 ? p.id[static_cast<std::size_t>(b)] : b);
-      for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
+      for (int e = hist_.hStart[h]; e < hist_.hStart[h + 1]; ++e)
         if (key[e] == want) {
           key[e] = kTaken;
-          list.slot.push_back(e);
+          list_.slot.push_back(e);
           return;
         }
     }
     if (b >= 0 && static_cast<std::size_t>(b) < n) {
       const auto h = static_cast<std::size_t>(perm[static_cast<std::size_t>(b)]);
-      for (int e = hist.hStart[h]; e < hist.hStart[h + 1]; ++e)
+      for (int e = hist_.hStart[h]; e < hist_.hStart[h + 1]; ++e)
         if (key[e] == static_cast<double>(p.id[a])) {
           key[e] = kTaken;
-          for (int k = 0; k < 3; ++k) hist.hS[3 * static_cast<std::size_t>(e) + k] *= -1.0;
-          list.slot.push_back(e);
+          for (int k = 0; k < 3; ++k) hist_.hS[3 * static_cast<std::size_t>(e) + k] *= -1.0;
+          list_.slot.push_back(e);
           return;
         }
     }
-    list.slot.push_back(-1);
+    list_.slot.push_back(-1);
   };
   int ba = 0;  // the bin of item q: the run of binItems it lies in
   for (std::size_t q = 0; q < nAll; ++q) {
-    while (bins.binStart[static_cast<std::size_t>(ba) + 1] <= static_cast<int>(q)) ++ba;
-    list.rowStart[q] = static_cast<int>(list.nbr.size());
-    ensureRows(list.nbr, list.nbr.size() + 64, q, nAll);
-    ensureRows(list.slot, list.slot.size() + 64, q, nAll);
-    const auto a = static_cast<std::size_t>(bins.binItems[q]);
+    while (bins_.binStart[static_cast<std::size_t>(ba) + 1] <= static_cast<int>(q)) ++ba;
+    list_.rowStart[q] = static_cast<int>(list_.nbr.size());
+    ensureRows(list_.nbr, list_.nbr.size() + 64, q, nAll);
+    ensureRows(list_.slot, list_.slot.size() + 64, q, nAll);
+    const auto a = static_cast<std::size_t>(bins_.binItems[q]);
     const bool ownA = a < n;
-    const int bx = ba % bins.nbx[0], by = (ba / bins.nbx[0]) % bins.nbx[1], bz = ba / sz;
+    const int bx = ba % bins_.nbx[0], by = (ba / bins_.nbx[0]) % bins_.nbx[1], bz = ba / sz;
     const auto visit = [&](int from, int to) {
       for (int t = from; t < to; ++t) {
-        const int j = bins.binItems[static_cast<std::size_t>(t)];
+        const int j = bins_.binItems[static_cast<std::size_t>(t)];
         const auto u = static_cast<std::size_t>(j);
         if (!ownA && u >= n) continue;
         const double ex = X[a] - X[u], ey = Y[a] - Y[u], ez = Z[a] - Z[u];
         const double cut = R[a] + R[u] + skin;
         if (ex * ex + ey * ey + ez * ez < cut * cut) {
-          list.nbr.push_back(j);
+          list_.nbr.push_back(j);
           lookup(a, j);
         }
       }
     };
-    visit(static_cast<int>(q) + 1, bins.binStart[static_cast<std::size_t>(ba) + 1]);
+    visit(static_cast<int>(q) + 1, bins_.binStart[static_cast<std::size_t>(ba) + 1]);
     for (int f = 0; f < nf; ++f) {
       const int cx = bx + fwd[f][0], cy = by + fwd[f][1], cz = bz + fwd[f][2];
-      if (cx < 0 || cx >= bins.nbx[0] || cy < 0 || cy >= bins.nbx[1] || cz >= bins.nbx[2]) continue;
+      if (cx < 0 || cx >= bins_.nbx[0] || cy < 0 || cy >= bins_.nbx[1] || cz >= bins_.nbx[2])
+        continue;
       const auto b = static_cast<std::size_t>(cx + cy * sy + cz * sz);
-      visit(bins.binStart[b], bins.binStart[b + 1]);
+      visit(bins_.binStart[b], bins_.binStart[b + 1]);
     }
     if (!ownA) continue;
     for (int d = 0; d < 3; ++d)
       for (int s = 0; s < 2; ++s) {
         if (!wallOn[d][static_cast<std::size_t>(s)]) continue;
         const double dist =
-            s == 0 ? p.x[d][a] - bins.origin[d] : bins.origin[d] + bins.L[d] - p.x[d][a];
+            s == 0 ? p.x[d][a] - bins_.origin[d] : bins_.origin[d] + bins_.L[d] - p.x[d][a];
         if (dist < R[a] + skin) {
           const int code = -1 - (2 * d + s);
-          list.nbr.push_back(code);
+          list_.nbr.push_back(code);
           lookup(a, code);
         }
       }
   }
-  list.rowStart[nAll] = static_cast<int>(list.nbr.size());
-  trimRows(list.nbr);
-  trimRows(list.slot);
+  list_.rowStart[nAll] = static_cast<int>(list_.nbr.size());
+  trimRows(list_.nbr);
+  trimRows(list_.slot);
   // rows no entry took are free slots
-  hist.freeSlots.clear();
-  for (std::size_t e = 0; e < hist.slots(); ++e)
-    if (key[e] != kTaken) hist.freeSlot(static_cast<int>(e));
+  hist_.freeSlots.clear();
+  for (std::size_t e = 0; e < hist_.slots(); ++e)
+    if (key[e] != kTaken) hist_.freeSlot(static_cast<int>(e));
 }
 
 }  // namespace coloc::dem
@@ -132,10 +133,10 @@ namespace coloc::dem::detail {
 void NeighbourSearch::keepPositions(const ParticleStore& p) {
   // x0 in the keys' array (history.hpp), which the list build has read for the last time
   const std::size_t n = p.nOwned;
-  ensure(hist.hKey, 3 * n);
-  hist.hKey.resize(3 * n);
+  ensure(hist_.hKey, 3 * n);
+  hist_.hKey.resize(3 * n);
   for (int d = 0; d < 3; ++d)
-    std::copy_n(p.x[d].begin(), n, hist.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
+    std::copy_n(p.x[d].begin(), n, hist_.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
 }
 
 double NeighbourSearch::maxDisplacement2(const ParticleStore& p) const {
@@ -144,7 +145,7 @@ double NeighbourSearch::maxDisplacement2(const ParticleStore& p) const {
   // on the vector units: a max-reduction (exact in any order; NaN and inf become the largest
   // double first, so a lost particle forces the rebuild)
   const double *X = p.x[0].data(), *Y = p.x[1].data(), *Z = p.x[2].data();
-  const double *X0 = hist.x0(0, n), *Y0 = hist.x0(1, n), *Z0 = hist.x0(2, n);
+  const double *X0 = hist_.x0(0, n), *Y0 = hist_.x0(1, n), *Z0 = hist_.x0(2, n);
   constexpr double kBig = std::numeric_limits<double>::max();
 #pragma omp simd reduction(max : m2)
   for (std::size_t i = 0; i < n; ++i) {

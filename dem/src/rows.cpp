@@ -1,6 +1,8 @@
 // dem/src/rows.cpp — generic pack/unpack of particle rows over the field table.
 #include "rows.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <type_traits>
@@ -135,8 +137,7 @@ namespace coloc::dem {
 
 std::size_t ParticleStore::addField(const std::string& name, int components, unsigned ops) {
   if (components != 1 && components != 3)
-    throw Error("particle field '" + name + "': 1 or 3 components, not " +
-                std::to_string(components));
+    throw Error(fmt::format("particle field '{}': 1 or 3 components, not {}", name, components));
   bool taken = false;
   forEachField(*this, [&](const FieldInfo& fi, const auto*) { taken = taken || fi.name == name; });
   if (taken) throw Error("particle field '" + name + "' is already declared");
@@ -159,8 +160,7 @@ auto& extraColumn(S& s, std::string_view name, int component) {
   for (auto& e : s.extra)
     if (e.name == name && component >= 0 && component < e.components)
       return e.data[static_cast<std::size_t>(component)];
-  throw Error("no particle field '" + std::string(name) + "' with component " +
-              std::to_string(component));
+  throw Error(fmt::format("no particle field '{}' with component {}", name, component));
 }
 }  // namespace
 

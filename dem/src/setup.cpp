@@ -1,5 +1,7 @@
 // dem/src/setup.cpp — setup of the DEM: materials, bins, the time-step check, the initial
 // particles.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -29,7 +31,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   for (int k = 0; k < 3; ++k) integrator.g[k] = grav[k];
   overlapLimit = cfg.number("particles.overlap_limit");
   dtFraction = cfg.number("particles.dt_fraction");
-  search.hist.hStart.assign(1, 0);
+  search.mutableHistory().hStart.assign(1, 0);
   readMaterials(cfg);
   heat.setup(cfg, mats, p);  // registers the temperature fields when particles.heat is on
   for (const auto& m : mats) forces.law.rolling = forces.law.rolling || m.rollingFriction > 0;
@@ -78,13 +80,13 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   // then fill them (growing ~23 arrays particle by particle cost a third of a 2M-particle set-up
   // in copies and page faults).
   {
-    const auto ownsX = [this](const double* x) { return search.bins.owns(x); };
+    const auto ownsX = [this](const double* x) { return search.bins().owns(x); };
     std::size_t count = 0;
-    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
+    detail::generate(cfg, info, search.bins().lo, search.bins().hi, ownsX,
                      [&count](const detail::NewParticle&) { ++count; });
     detail::resizeAll(p, count);
-    search.hist.hStart.assign(count + 1, 0);
-    detail::generate(cfg, info, search.bins.lo, search.bins.hi, ownsX,
+    search.mutableHistory().hStart.assign(count + 1, 0);
+    detail::generate(cfg, info, search.bins().lo, search.bins().hi, ownsX,
                      [this](const detail::NewParticle& q) { addParticle(q); });
   }
   checkTimeStep();
@@ -140,8 +142,8 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
                       "give particles.bin_cells or particles.bin_split, "
                       "not both");
   const auto range = [&] {
-    return "the interaction range " + fmt(rc) + " m (largest diameter " + fmt(dmax) + " m + skin " +
-           fmt(skin) + " m)";
+    return fmt::format("the interaction range {:.4g} m (largest diameter {:.4g} m + skin {:.4g} m)",
+                       rc, dmax, skin);
   };
   for (int d = 0; d < 3; ++d) {
     const double h = grid.spacing(d);
@@ -158,9 +160,10 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
       multiple = kc;
       key = "particles.bin_cells";
       if (!divides(kc))
-        throw ConfigError(key, "a bin of " + std::to_string(kc) + " cells does not fit the " +
-                                   "blocks along " + kAxis[d] + ": every block edge (cell " +
-                                   "cuts of the decomposition) must fall on a bin edge");
+        throw ConfigError(key, fmt::format("a bin of {} cells does not fit the blocks along {}: "
+                                           "every block edge (cell cuts of the decomposition) "
+                                           "must fall on a bin edge",
+                                           kc, kAxis[d]));
     } else {
       key = "particles.bin_cells";
       if (h >= rc) {
@@ -173,30 +176,30 @@ BinLayout binLayout(const Config& cfg, const GlobalGrid& grid,
         // A range wider than the box is refused before it becomes a bin count (a skin of 1e20
         // would overflow the cast and loop through every integer).
         if (!(rc / h <= static_cast<double>(grid.cells[d])))
-          throw ConfigError("particles.skin", range() + " is wider than the box along " + kAxis[d] +
-                                                  " (" + fmt(h * grid.cells[d]) +
-                                                  " m): lower particles.skin or the particle size");
+          throw ConfigError("particles.skin",
+                            fmt::format("{} is wider than the box along {} ({:.4g} m): lower "
+                                        "particles.skin or the particle size",
+                                        range(), kAxis[d], h * grid.cells[d]));
         multiple = static_cast<long long>(std::ceil(rc / h));
         while (multiple <= grid.cells[d] && (!divides(multiple) || multiple * h < rc)) ++multiple;
         if (multiple > grid.cells[d])
-          throw ConfigError(key, std::string("no bin made of whole cells holds ") + range() +
-                                     " and fits the blocks along " + kAxis[d] + " (cell " + fmt(h) +
-                                     " m): use larger cells or fewer ranks");
+          throw ConfigError(key, fmt::format("no bin made of whole cells holds {} and fits the "
+                                             "blocks along {} (cell {:.4g} m): use larger cells "
+                                             "or fewer ranks",
+                                             range(), kAxis[d], h));
       }
     }
     out.size[d] = split > 1 ? h / static_cast<double>(split) : h * static_cast<double>(multiple);
     out.split[d] = split;
     out.multiple[d] = split > 1 ? 1 : multiple;
     if (any && out.size[d] < rc)
-      throw ConfigError(key, "the bin edge " + fmt(out.size[d]) + " m along " + kAxis[d] +
-                                 " is smaller than " + range());
+      throw ConfigError(key, fmt::format("the bin edge {:.4g} m along {} is smaller than {}",
+                                         out.size[d], kAxis[d], range()));
     out.globalBins[d] = split > 1 ? grid.cells[d] * split : grid.cells[d] / multiple;
     if (any && grid.periodic[d] && out.globalBins[d] < 2)
-      throw ConfigError(key, std::string("a periodic axis needs at least 2 bins (") + kAxis[d] +
-                                 " has " + std::to_string(out.globalBins[d]) +
-                                 "): the box must be at least "
-                                 "twice " +
-                                 range());
+      throw ConfigError(key, fmt::format("a periodic axis needs at least 2 bins ({} has {}): the "
+                                         "box must be at least twice {}",
+                                         kAxis[d], out.globalBins[d], range()));
   }
   return out;
 }
@@ -207,14 +210,14 @@ void DemSolver::Impl::setupBins(const Config& cfg, double dmax, long long total)
   const BinLayout b = dec.isTiled()
                           ? binLayout(cfg, grid, boxLayoutOf(dec).cutPlanes(), dmax, skin, total)
                           : binLayout(cfg, grid, dec.cuts(), dmax, skin, total);
-  search.bins.setup(grid, b, dec.lo(), dec.hi());
+  search.setupBins(grid, b, dec.lo(), dec.hi());
   // the particle exchange of the layout (exchange.hpp), lent the solver's state
   exchange = detail::makeExchange({.dec = dec,
                                    .comm = comm,
                                    .timers = timers,
                                    .p = p,
-                                   .hist = search.hist,
-                                   .bins = search.bins,
+                                   .hist = search.mutableHistory(),
+                                   .bins = search.bins(),
                                    .rc = rc,
                                    .where = [this] { return where(); }},
                                   b);
@@ -297,11 +300,11 @@ void DemSolver::Impl::addParticle(const detail::NewParticle& q) {
     p.v[d][i] = q.v[d];
     p.omega[d][i] = p.f[d][i] = p.torque[d][i] = p.fExt[d][i] = 0;
   }
-  if (search.hist.hStart.size() < n + 1) {
-    ensure(search.hist.hStart, n + 1);
-    search.hist.hStart.resize(n + 1);
+  if (search.mutableHistory().hStart.size() < n + 1) {
+    ensure(search.mutableHistory().hStart, n + 1);
+    search.mutableHistory().hStart.resize(n + 1);
   }
-  search.hist.hStart[n] = search.hist.hStart[n - 1];
+  search.mutableHistory().hStart[n] = search.mutableHistory().hStart[n - 1];
 }
 
 }  // namespace coloc::dem

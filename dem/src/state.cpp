@@ -1,5 +1,7 @@
 // dem/src/state.cpp — the DEM state: canonical snapshot (save) and restore from any rank's subset
 // (checkpoints, re-balancing), particle rows of the field table.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -18,7 +20,7 @@ using namespace detail;
 // state: checkpoint/restart and re-balancing
 
 int DemSolver::Impl::ownerRank(const double* x) const {
-  return search.bins.ownerRank(dec, x);
+  return search.bins().ownerRank(dec, x);
 }
 
 namespace {
@@ -68,7 +70,7 @@ void routeHistoriesById(const Comm& comm, const ParticleStore& p, DemState& st, 
   for (std::size_t h = 0; h < st.contacts.size(); ++h) {
     const auto& c = st.contacts[h];
     if (c.holder < 0) {
-      if (err.empty()) err = "a restored contact history has holder id " + std::to_string(c.holder);
+      if (err.empty()) err = fmt::format("a restored contact history has holder id {}", c.holder);
       dest[h] = 0;
       continue;
     }
@@ -99,8 +101,10 @@ void routeHistoriesById(const Comm& comm, const ParticleStore& p, DemState& st, 
       const auto it = std::lower_bound(owner.begin(), owner.end(), std::make_pair(id, -1));
       if (it == owner.end() || it->first != id) {
         if (err.empty())
-          err = "a restored contact history names holder " + std::to_string(id) +
-                ", which is not among the restored particles";
+          err = fmt::format(
+              "a restored contact history names holder {}, which is not among the restored "
+              "particles",
+              id);
         continue;
       }
       dest.push_back(it->second);
@@ -193,8 +197,8 @@ void DemSolver::Impl::restore(DemState& st) {
   for (std::size_t i = 0; i < q.nOwned && err.empty(); ++i)
     for (int d = 0; d < 3; ++d)
       if (!std::isfinite(x0(i, d))) {
-        err = "restored particle " + std::to_string(q.id[i]) + " has a rebuild position " +
-              "(x_rebuild) that is not finite";
+        err = fmt::format(
+            "restored particle {} has a rebuild position (x_rebuild) that is not finite", q.id[i]);
         break;
       }
   comm.raiseIfAny(err);
@@ -236,8 +240,8 @@ void DemSolver::Impl::restore(DemState& st) {
             [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t i = 0; i < n && err.empty(); ++i)
     if (p.material[i] < 0 || p.material[i] >= forces.law.nMat)
-      err = "restored particle " + std::to_string(p.id[i]) + " has material " +
-            std::to_string(p.material[i]) + " (" + std::to_string(forces.law.nMat) + " declared)";
+      err = fmt::format("restored particle {} has material {} ({} declared)", p.id[i],
+                        p.material[i], forces.law.nMat);
   comm.raiseIfAny(err);
   // 2. every history to the rank of its holder; `row` = the holder's local row
   std::vector<double> mine;
@@ -267,17 +271,18 @@ void DemSolver::Impl::restore(DemState& st) {
   }
   const std::size_t nh = row.size();
   // 3. history rows per local particle (the format migration and the list build use)
-  search.hist.hStart.assign(n + 1, 0);
-  for (std::size_t h = 0; h < nh; ++h) ++search.hist.hStart[static_cast<std::size_t>(row[h]) + 1];
-  for (std::size_t i = 0; i < n; ++i) search.hist.hStart[i + 1] += search.hist.hStart[i];
-  search.hist.hKey.assign(nh, 0.0);
-  search.hist.hS.assign(3 * nh, 0.0);
-  std::vector<int> cur(search.hist.hStart.begin(), search.hist.hStart.end() - 1);
+  HistoryPool& hist = search.mutableHistory();
+  hist.hStart.assign(n + 1, 0);
+  for (std::size_t h = 0; h < nh; ++h) ++hist.hStart[static_cast<std::size_t>(row[h]) + 1];
+  for (std::size_t i = 0; i < n; ++i) hist.hStart[i + 1] += hist.hStart[i];
+  hist.hKey.assign(nh, 0.0);
+  hist.hS.assign(3 * nh, 0.0);
+  std::vector<int> cur(hist.hStart.begin(), hist.hStart.end() - 1);
   for (std::size_t h = 0; h < nh; ++h) {
     const auto e = static_cast<std::size_t>(cur[static_cast<std::size_t>(row[h])]++);
     const double* rec = &mine[h * kHistRec];
-    search.hist.hKey[e] = static_cast<double>(historyPartner(rec));
-    std::copy_n(historyShear(rec), 3, &search.hist.hS[3 * e]);
+    hist.hKey[e] = static_cast<double>(historyPartner(rec));
+    std::copy_n(historyShear(rec), 3, &hist.hS[3 * e]);
   }
   // 4. the saving run's last rebuild, redone: at x0 the particles take the same ranks, the same
   //    (bin, id) order, ghosts and Verlet lists (so the same sums in the same order), and x0 is
@@ -287,24 +292,24 @@ void DemSolver::Impl::restore(DemState& st) {
   //    leaves f, torque and histories as saved
   checkTimeStep();
   rebuild(true);
-  search.hist.compact(
-      search.list.slot);       // the rows held every history twice (under both particles of a pair)
-  trimRows(search.hist.hKey);  // sized for those rows, now x0 (3 per particle)
+  search.compactHistory();  // the rows held every history twice (under both particles of a pair)
+  trimRows(hist.hKey);      // sized for those rows, now x0 (3 per particle)
   const std::function<std::string()> at = [this] { return where(); };
   for (std::size_t i = 0; i < p.nOwned && err.empty() && withX0; ++i) {
     const auto it = std::lower_bound(xNow.begin(), xNow.end(), p.id[i],
                                      [](const auto& e, std::int64_t id) { return e.first < id; });
     if (it == xNow.end() || it->first != p.id[i]) {
-      err = "restored particle " + std::to_string(p.id[i]) + " left its rank at the rebuild at " +
-            "its rebuild position (x_rebuild)";
+      err = fmt::format(
+          "restored particle {} left its rank at the rebuild at its rebuild position (x_rebuild)",
+          p.id[i]);
       break;
     }
     for (int d = 0; d < 3; ++d) p.x[d][i] = it->second[static_cast<std::size_t>(d)];
     // where it is now must be a place a step could have left it: inside the walls (a periodic
     // axis wraps at the next rebuild)
     for (int d = 0; d < 3 && err.empty(); ++d)
-      if (!search.bins.periodic[d] && detail::crossAxis(p, search.bins, i, d) == detail::kLost)
-        err = detail::lostMessage(p, search.bins, i, d, at());
+      if (!search.bins().periodic[d] && detail::crossAxis(p, search.bins(), i, d) == detail::kLost)
+        err = detail::lostMessage(p, search.bins(), i, d, at());
   }
   comm.raiseIfAny(err);
   if (withX0) {  // the ghosts to where their owners are now
@@ -339,19 +344,19 @@ DemState DemSolver::Impl::save() {
   const std::size_t n = p.nOwned;
   st.particles = ownedRows(p);
   for (int d = 0; d < 3; ++d) {
-    const double* x0 = search.hist.x0(d, n);
+    const double* x0 = search.history().x0(d, n);
     st.xRebuild[static_cast<std::size_t>(d)].assign(x0, x0 + n);
   }
   // every touching history under each owned particle of the pair (a restart on other ranks may
   // separate them), as seen from that particle
   for (std::size_t q = 0; q < p.size(); ++q) {
-    const auto a = static_cast<std::size_t>(search.bins.binItems[q]);
-    for (int e = search.list.rowStart[q]; e < search.list.rowStart[q + 1]; ++e) {
-      const int sl = search.list.slot[static_cast<std::size_t>(e)];
+    const auto a = static_cast<std::size_t>(search.bins().binItems[q]);
+    for (int e = search.list().rowStart[q]; e < search.list().rowStart[q + 1]; ++e) {
+      const int sl = search.list().slot[static_cast<std::size_t>(e)];
       if (sl < 0) continue;
-      const double* sh = &search.hist.hS[3 * static_cast<std::size_t>(sl)];
+      const double* sh = &search.history().hS[3 * static_cast<std::size_t>(sl)];
       if (sh[0] == 0 && sh[1] == 0 && sh[2] == 0) continue;
-      const int j = search.list.nbr[static_cast<std::size_t>(e)];
+      const int j = search.list().nbr[static_cast<std::size_t>(e)];
       if (a < n) {
         ContactHistory c;
         c.holder = p.id[a];

@@ -1,5 +1,7 @@
 #include "boundary.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 namespace coloc::fv {
@@ -139,7 +141,7 @@ BoxBc boundaryFromConfig(const Config& cfg, const GlobalGrid& grid) {
   if (!cfg.has("fluid.patches")) return finish();
   const Json& patches = cfg.at("fluid.patches");
   for (std::size_t k = 0; k < patches.size(); ++k) {
-    const std::string key = "fluid.patches[" + std::to_string(k) + "]";
+    const std::string key = fmt::format("fluid.patches[{}]", k);
     const Json& j = patches[k];
     const std::string faceName = j.at("face").get<std::string>();
     const int fi = faceIndex(faceName);

@@ -1,5 +1,7 @@
 // The fluid solver's construction, accessors, state and outputs (docs/fv.md); the step is in
 // step.cpp, the choices are documented in docs/fv.md.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -23,16 +25,16 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
       smallest = std::min(smallest, boxHi[r][a] - boxLo[r][a]);
     if (smallest < kGhost)
       throw ConfigError("partition.dims",
-                        "the fluid needs blocks of at least " + std::to_string(kGhost) +
-                            " cells along every axis; a block has " + std::to_string(smallest) +
-                            " along axis " + std::to_string(a) + ": use fewer ranks along it");
+                        fmt::format("the fluid needs blocks of at least {} cells along every "
+                                    "axis; a block has {} along axis {}: use fewer ranks along it",
+                                    kGhost, smallest, a));
   }
   for (int a = 0; a < 3; ++a)
     if (grid.periodic[a] && grid.cells[a] < 3)
       throw ConfigError("domain.cells",
-                        std::string("a periodic axis needs at least 3 cells for the "
-                                    "pressure solver (hypre PFMG); axis ") +
-                            "xyz"[a] + " has " + std::to_string(grid.cells[a]));
+                        fmt::format("a periodic axis needs at least 3 cells for the pressure "
+                                    "solver (hypre PFMG); axis {} has {}",
+                                    "xyz"[a], grid.cells[a]));
   prm = fluidParams(cfg, grid);
   mom.nu = prm.nu;
   mom.h = h;

@@ -7,6 +7,8 @@
 // velocity (the fluxes of the continuity equation), central diffusion. Every face flux is
 // computed from the same operands by the two cells that share it, so it cancels exactly; the
 // heat through the box faces and from the source is accumulated (J) for the energy balance.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -134,9 +136,10 @@ void FluidSolver::Impl::heatStep(double dt) {
   ratio = dec.comm().max(ratio);
   const double want = std::ceil(dt * ratio);
   if (!std::isfinite(want) || want > static_cast<double>(kMaxHeatSubsteps))
-    throw Error("fluid step " + std::to_string(steps + 1) + ": the energy equation would need " +
-                std::to_string(want) + " sub-steps (more than " + std::to_string(kMaxHeatSubsteps) +
-                "): reduce fluid.dt");
+    throw Error(
+        fmt::format("fluid step {}: the energy equation would need {:f} sub-steps (more "
+                    "than {}): reduce fluid.dt",
+                    steps + 1, want, kMaxHeatSubsteps));
   const long long N = std::max(1LL, static_cast<long long>(want));
   const double dts = dt / static_cast<double>(N);
   const bool hasSource = !f.heatSource.data().empty();

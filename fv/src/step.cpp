@@ -4,9 +4,10 @@
 //   sum_f w_f (q_P - q_nb) = -div(eps^{n+1} u*) - (eps^{n+1} - eps^n)/dt       assemblePressureRhs
 //   q = p dt                                                                   solvePressure
 //   u^{n+1} = u* - eps_f/(eps_f + K_f dt) grad q                                project
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include "coloc/core/failure.hpp"
@@ -15,7 +16,7 @@
 namespace coloc::fv {
 
 void FluidSolver::Impl::step(double dt) {
-  if (!(dt > 0) || !std::isfinite(dt)) throw Error("fluid step: invalid dt " + std::to_string(dt));
+  if (!(dt > 0) || !std::isfinite(dt)) throw Error(fmt::format("fluid step: invalid dt {:f}", dt));
   exchangeInputs();
   if (!uGhostsFresh) fillGhosts();
   predictVelocity(dt);
@@ -127,13 +128,11 @@ void FluidSolver::Impl::computeRates(double dt) {
           const double lo = U(i, j, k);
           const double hi = U(i + (a == 0), j + (a == 1), k + (a == 2));
           if (!std::isfinite(lo) || !std::isfinite(hi)) {
-            char buf[256];
-            std::snprintf(buf, sizeof buf,
-                          "fluid step %lld: non-finite velocity u_%c = %g at cell (%d, %d, %d) "
-                          "(global index)",
-                          steps, "xyz"[a], std::isfinite(lo) ? hi : lo, dec.lo()[0] + i,
-                          dec.lo()[1] + j, dec.lo()[2] + k);
-            err = buf;
+            err = fmt::format(
+                "fluid step {}: non-finite velocity u_{} = {:g} at cell ({}, {}, {}) (global "
+                "index)",
+                steps, "xyz"[a], std::isfinite(lo) ? hi : lo, dec.lo()[0] + i, dec.lo()[1] + j,
+                dec.lo()[2] + k);
             break;
           }
           r += std::max(std::fabs(lo), std::fabs(hi)) / h[a];
@@ -144,13 +143,11 @@ void FluidSolver::Impl::computeRates(double dt) {
         if (r > rate) rate = r, at = {i, j, k};
       }
   if (err.empty() && dt > 0 && rate * dt > prm.cflMax) {
-    char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "fluid step %lld: CFL %g at cell (%d, %d, %d) (global index) exceeds "
-                  "fluid.cfl_max = %g (dt = %g s): reduce fluid.dt or use fluid.adaptive_dt",
-                  steps, rate * dt, dec.lo()[0] + at[0], dec.lo()[1] + at[1], dec.lo()[2] + at[2],
-                  prm.cflMax, dt);
-    err = buf;
+    err = fmt::format(
+        "fluid step {}: CFL {:g} at cell ({}, {}, {}) (global index) exceeds fluid.cfl_max = {:g} "
+        "(dt = {:g} s): reduce fluid.dt or use fluid.adaptive_dt",
+        steps, rate * dt, dec.lo()[0] + at[0], dec.lo()[1] + at[1], dec.lo()[2] + at[2], prm.cflMax,
+        dt);
   }
   // One allreduce for the check and the rates: the largest rate, change and speed, and whether
   // any rank failed (then every rank takes the error path of raiseIfAny). A failing rank arms
@@ -299,15 +296,13 @@ void FluidSolver::Impl::assemblePressureRhs(double dt) {
     // Every rank sees the non-finite global sum; the ranks that own a bad cell say where.
     std::string err;
     if (badCell[0] >= 0) {
-      char buf[256];
-      std::snprintf(buf, sizeof buf,
-                    "fluid step %lld: non-finite velocity after the predictor: divergence %g at "
-                    "cell (%d, %d, %d) (global index)",
-                    steps + 1, badValue, badCell[0], badCell[1], badCell[2]);
-      err = buf;
+      err = fmt::format(
+          "fluid step {}: non-finite velocity after the predictor: divergence {:g} at cell ({}, "
+          "{}, {}) (global index)",
+          steps + 1, badValue, badCell[0], badCell[1], badCell[2]);
     }
     dec.comm().raiseIfAny(err);
-    throw Error("fluid step " + std::to_string(steps + 1) + ": non-finite velocity");
+    throw Error(fmt::format("fluid step {}: non-finite velocity", steps + 1));
   }
   if (singular) {
     // All faces Neumann or periodic: remove the (round-off, or physically inconsistent) mean.
@@ -328,14 +323,12 @@ void FluidSolver::Impl::solvePressure() {
     // The same verdict on every rank (hypre's norms are global).
     ++unconverged;
     if (ps->options().errorOnNoConvergence) {
-      char buf[320];
-      std::snprintf(buf, sizeof buf,
-                    "fluid.pressure.on_no_convergence = error: the pressure solve of fluid step "
-                    "%lld did not converge: ||r|| = %.3g above the target %.3g after %d "
-                    "iterations (fluid.pressure.max_iter = %d, fluid.pressure.tol = %g)",
-                    steps + 1, ps->lastResidualNorm(), ps->lastTarget(), itLast,
-                    ps->options().maxIter, ps->options().tol);
-      throw Error(buf);
+      throw Error(fmt::format(
+          "fluid.pressure.on_no_convergence = error: the pressure solve of fluid step {} did not "
+          "converge: ||r|| = {:.3g} above the target {:.3g} after {} iterations "
+          "(fluid.pressure.max_iter = {}, fluid.pressure.tol = {:g})",
+          steps + 1, ps->lastResidualNorm(), ps->lastTarget(), itLast, ps->options().maxIter,
+          ps->options().tol));
     }
   }
 }
