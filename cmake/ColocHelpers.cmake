@@ -13,18 +13,6 @@ function(coloc_add_library name)
   add_library(coloc::${name} ALIAS coloc_${name})
   target_include_directories(coloc_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
   target_link_libraries(coloc_${name} PUBLIC ${A_DEPS})
-  coloc_precompile_headers(coloc_${name})
-endfunction()
-
-# coloc_precompile_headers(target): with COLOC_PCH (default ON), the headers that nearly every
-# source of `target` parses through coloc/core/config.hpp (nlohmann/json, mpi.h, the standard
-# containers) compiled once per target instead of once per source: about 2.5 s of CPU a source
-# file, most of the time of a fresh build (docs/architecture.md, "Build time").
-function(coloc_precompile_headers target)
-  if(COLOC_PCH AND NOT COLOC_SMPI)
-    target_precompile_headers(${target} PRIVATE <array> <map> <memory> <string> <vector>
-                              <functional> <optional> <nlohmann/json.hpp> <mpi.h>)
-  endif()
 endfunction()
 
 # coloc_add_mpi_test(NAME exe RANKS 1 2 4 LABELS ... [ARGS ...] [TIMEOUT s]):
