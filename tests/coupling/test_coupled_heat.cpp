@@ -122,8 +122,9 @@ TEST(Convection, NusseltLaws) {
               2.0 + 0.6 * 10.0 * std::cbrt(0.7), 1e-14);
   EXPECT_NEAR(coupling::nusselt(coupling::HeatLaw::Gunn, 1.0, 0.0, pr), 2.0, 1e-14);
   const double eps = 0.4, re = 50.0;
-  const double gunn = (7 - 10 * eps + 5 * eps * eps) * (1 + 0.7 * std::pow(re, 0.2) * std::cbrt(pr)) +
-                      (1.33 - 2.4 * eps + 1.2 * eps * eps) * std::pow(re, 0.7) * std::cbrt(pr);
+  const double gunn =
+      (7 - 10 * eps + 5 * eps * eps) * (1 + 0.7 * std::pow(re, 0.2) * std::cbrt(pr)) +
+      (1.33 - 2.4 * eps + 1.2 * eps * eps) * std::pow(re, 0.7) * std::cbrt(pr);
   EXPECT_NEAR(coupling::nusselt(coupling::HeatLaw::Gunn, eps, re, pr), gunn, 1e-12 * gunn);
   EXPECT_EQ(coupling::nusselt(coupling::HeatLaw::None, eps, re, pr), 0.0);
   EXPECT_THROW(coupling::heatLawFromName("dittus"), ConfigError);
