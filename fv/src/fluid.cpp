@@ -107,6 +107,16 @@ void FluidSolver::Impl::takeInputs(const CouplingInputs& in) {
   });
   if (in.heatSource && prm.heat.on)
     forEach(owned, [&](int i, int j, int k) { f.heatSource(i, j, k) = (*in.heatSource)(i, j, k); });
+  heatImplicit = in.heatCoefficient && prm.heat.on;
+  if (heatImplicit) {
+    if (f.heatCoefficient.data().empty()) {  // the first step with convection
+      f.heatCoefficient = CellField(f.T.layout(), 0.0);
+      f.Tmean = CellField(f.T.layout(), 0.0);
+    }
+    forEach(owned, [&](int i, int j, int k) {
+      f.heatCoefficient(i, j, k) = (*in.heatCoefficient)(i, j, k);
+    });
+  }
   uGhostsFresh = false;  // a superficial inlet's face velocity is U / eps
   epsGhostsFresh = false;
   ratesStale = true;
