@@ -183,6 +183,30 @@ CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const
 // ---- the run's counters ---------------------------------------------------------------------
 
 namespace {
+/// One counter as an attribute: a double, an integer, a flag (an integer 0 or 1) or a 3-vector.
+template <class T>
+void writeCounter(H5File& file, const std::string& group, const char* name, const T& v) {
+  if constexpr (std::is_same_v<T, std::array<double, 3>>)
+    file.setAttribute(group, name, std::span<const double>(v));
+  else if constexpr (std::is_same_v<T, bool>)
+    file.setAttribute(group, name, static_cast<long long>(v ? 1 : 0));
+  else
+    file.setAttribute(group, name, v);
+}
+template <class T>
+void readCounter(H5File& file, const std::string& group, const char* name, T& v) {
+  if constexpr (std::is_same_v<T, std::array<double, 3>>) {
+    const auto a = file.attributeDoubles(group, name);
+    for (std::size_t d = 0; d < 3 && d < a.size(); ++d) v[d] = a[d];
+  } else if constexpr (std::is_same_v<T, bool>) {
+    v = file.attributeInt(group, name) != 0;
+  } else if constexpr (std::is_same_v<T, long long>) {
+    v = file.attributeInt(group, name);
+  } else {
+    v = file.attributeDouble(group, name);
+  }
+}
+
 /// The attribute name of each counter, in one order: fn(name, member).
 template <class C, class Fn>
 void forEachRunCounter(C& c, Fn&& fn) {
@@ -197,31 +221,51 @@ void forEachRunCounter(C& c, Fn&& fn) {
   fn("particle_drag_impulse", c.particleImpulse);
   fn("fluid_drag_impulse", c.fluidImpulse);
 }
+
+/// Which fluid counters a checkpoint holds: every one; one that older files lack (read as the
+/// default when absent); one of fluid.heat (written and read only with it).
+enum class Held { Always, Since, Heat };
+
+/// The fluid's counters (fv::FluidCounters), one attribute each, in one order:
+/// fn(name, member, held).
+template <class C, class Fn>
+void forEachFluidCounter(C& c, Fn&& fn) {
+  fn("time", c.time, Held::Always);
+  fn("dt_old", c.dtOld, Held::Always);
+  fn("dt_last", c.dtLast, Held::Always);
+  fn("cfl_last", c.cflLast, Held::Always);
+  fn("max_rate", c.maxRate, Held::Always);
+  fn("steady_residual", c.steadyResidual, Held::Always);
+  fn("residual_last", c.resLast, Held::Always);
+  fn("rhs_scale_last", c.rhsScaleLast, Held::Always);
+  fn("steps", c.steps, Held::Always);
+  fn("iterations_sum", c.itSum, Held::Always);
+  fn("solves", c.solves, Held::Always);
+  fn("setups", c.setups, Held::Always);
+  fn("iterations_max", c.itMax, Held::Always);
+  fn("iterations_last", c.itLast, Held::Always);
+  fn("unconverged_solves", c.unconverged, Held::Since);
+  fn("have_old", c.haveOld, Held::Always);
+  fn("rates_stale", c.ratesStale, Held::Always);
+  // fluid.heat: the energy accounting
+  fn("heat_enthalpy_initial", c.heatEnthalpy0, Held::Heat);
+  fn("heat_source", c.heatSource, Held::Heat);
+  static constexpr const char* kFace[6] = {"heat_face_0", "heat_face_1", "heat_face_2",
+                                           "heat_face_3", "heat_face_4", "heat_face_5"};
+  for (std::size_t b = 0; b < 6; ++b) fn(kFace[b], c.heatFace[b], Held::Heat);
+  fn("heat_started", c.heatStarted, Held::Heat);
+}
 }  // namespace
 
 void writeRunCounters(H5File& file, const std::string& group, const RunCounters& c) {
   file.createGroup(group);
-  forEachRunCounter(c, [&](const char* name, const auto& v) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::array<double, 3>>)
-      file.setAttribute(group, name, std::span<const double>(v));
-    else
-      file.setAttribute(group, name, v);
-  });
+  forEachRunCounter(c,
+                    [&](const char* name, const auto& v) { writeCounter(file, group, name, v); });
 }
 
 RunCounters readRunCounters(H5File& file, const std::string& group) {
   RunCounters c;
-  forEachRunCounter(c, [&](const char* name, auto& v) {
-    using T = std::decay_t<decltype(v)>;
-    if constexpr (std::is_same_v<T, std::array<double, 3>>) {
-      const auto a = file.attributeDoubles(group, name);
-      for (std::size_t d = 0; d < 3 && d < a.size(); ++d) v[d] = a[d];
-    } else if constexpr (std::is_same_v<T, long long>) {
-      v = file.attributeInt(group, name);
-    } else {
-      v = file.attributeDouble(group, name);
-    }
-  });
+  forEachRunCounter(c, [&](const char* name, auto& v) { readCounter(file, group, name, v); });
   return c;
 }
 
@@ -241,32 +285,9 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
                             writeCellVector(file, path, dec, *a[0], *a[1], *a[2]);
                         });
   const fv::FluidCounters c = fluid.counters();
-  const std::pair<const char*, double> dbl[] = {{"time", c.time},
-                                                {"dt_old", c.dtOld},
-                                                {"dt_last", c.dtLast},
-                                                {"cfl_last", c.cflLast},
-                                                {"max_rate", c.maxRate},
-                                                {"steady_residual", c.steadyResidual},
-                                                {"residual_last", c.resLast},
-                                                {"rhs_scale_last", c.rhsScaleLast}};
-  for (const auto& [k, v] : dbl) file.setAttribute(group, k, v);
-  const std::pair<const char*, long long> ints[] = {{"steps", c.steps},
-                                                    {"iterations_sum", c.itSum},
-                                                    {"solves", c.solves},
-                                                    {"setups", c.setups},
-                                                    {"iterations_max", c.itMax},
-                                                    {"iterations_last", c.itLast},
-                                                    {"unconverged_solves", c.unconverged},
-                                                    {"have_old", c.haveOld ? 1 : 0},
-                                                    {"rates_stale", c.ratesStale ? 1 : 0}};
-  for (const auto& [k, v] : ints) file.setAttribute(group, k, v);
-  if (!fluid.fields().T.data().empty()) {  // fluid.heat: the energy accounting
-    file.setAttribute(group, "heat_enthalpy_initial", c.heatEnthalpy0);
-    file.setAttribute(group, "heat_source", c.heatSource);
-    for (std::size_t b = 0; b < 6; ++b)
-      file.setAttribute(group, "heat_face_" + std::to_string(b), c.heatFace[b]);
-    file.setAttribute(group, "heat_started", static_cast<long long>(c.heatStarted ? 1 : 0));
-  }
+  forEachFluidCounter(c, [&](const char* name, const auto& v, Held held) {
+    if (held != Held::Heat || fluid.hasHeat()) writeCounter(file, group, name, v);
+  });
 }
 
 void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
@@ -292,34 +313,14 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
       });
   file.comm().raiseIfAny(err.empty() ? err : "checkpoint '" + file.path() + "': " + err);
   fv::FluidCounters c;
-  c.time = file.attributeDouble(group, "time");
-  c.dtOld = file.attributeDouble(group, "dt_old");
-  c.dtLast = file.attributeDouble(group, "dt_last");
-  c.cflLast = file.attributeDouble(group, "cfl_last");
-  c.maxRate = file.attributeDouble(group, "max_rate");
-  c.steadyResidual = file.attributeDouble(group, "steady_residual");
-  c.resLast = file.attributeDouble(group, "residual_last");
-  c.rhsScaleLast = file.attributeDouble(group, "rhs_scale_last");
-  c.steps = file.attributeInt(group, "steps");
-  c.itSum = file.attributeInt(group, "iterations_sum");
-  c.solves = file.attributeInt(group, "solves");
-  c.setups = file.attributeInt(group, "setups");
-  c.itMax = file.attributeInt(group, "iterations_max");
-  c.itLast = file.attributeInt(group, "iterations_last");
-  try {  // absent from checkpoints written before it was counted
-    c.unconverged = file.attributeInt(group, "unconverged_solves");
-  } catch (const Error&) {
-    c.unconverged = 0;
-  }
-  c.haveOld = file.attributeInt(group, "have_old") != 0;
-  c.ratesStale = file.attributeInt(group, "rates_stale") != 0;
-  if (!fluid.fields().T.data().empty()) {  // fluid.heat (the table above read T)
-    c.heatEnthalpy0 = file.attributeDouble(group, "heat_enthalpy_initial");
-    c.heatSource = file.attributeDouble(group, "heat_source");
-    for (std::size_t b = 0; b < 6; ++b)
-      c.heatFace[b] = file.attributeDouble(group, "heat_face_" + std::to_string(b));
-    c.heatStarted = file.attributeInt(group, "heat_started") != 0;
-  }
+  forEachFluidCounter(c, [&](const char* name, auto& v, Held held) {
+    if (held == Held::Heat && !fluid.hasHeat()) return;  // (the table above read T with it)
+    if (held != Held::Since) return readCounter(file, group, name, v);
+    try {  // absent from checkpoints written before it was counted: the default
+      readCounter(file, group, name, v);
+    } catch (const Error&) {
+    }
+  });
   fluid.restoreState(c);
 }
 
