@@ -326,6 +326,59 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
 
 // ---- particles ----------------------------------------------------------------------------------
 
+namespace {
+/// The energy accounts (particles.heat; dem::DemHeat), when every rank's state has them: the
+/// attribute "heat" holds the run's values (enthalpy_initial, wall_heat_in, ext_heat_in,
+/// inflow_enthalpy_in, outflow_enthalpy_out: the report's), the dataset "heat_shares" one row
+/// per writing rank, its shares (wall_heat_in, ext_heat_in, outflow_enthalpy_out).
+void writeDemHeat(H5File& file, const std::string& group, const dem::DemHeat& h) {
+  const Comm& comm = file.comm();
+  if (comm.min(h.known ? 1LL : 0LL) == 0) return;
+  double sum[3] = {h.wallIn, h.extIn, h.outflowOut};
+  comm.sumInPlace(std::span<double>(sum, 3));
+  const std::vector<double> run = {h.enthalpyInitial, sum[0], sum[1], h.inflowIn, sum[2]};
+  file.setAttribute(group, "heat", std::span<const double>(run));
+  writeParticleVec3(file, group + "/heat_shares",
+                    {std::span<const double>(&h.wallIn, 1), std::span<const double>(&h.extIn, 1),
+                     std::span<const double>(&h.outflowOut, 1)});
+}
+
+/// The accounts of writeDemHeat: the shares' rows split evenly over the reading ranks (on the
+/// writer's rank count, each rank its own row), each rank the sum of its rows; without the
+/// shares, rank 0 holds the run's values. A file without them: none (not known).
+dem::DemHeat readDemHeat(H5File& file, const std::string& group) {
+  dem::DemHeat h;
+  std::vector<double> run;
+  try {  // absent from files written without particles.heat or before the accounts
+    run = file.attributeDoubles(group, "heat");
+  } catch (const Error&) {
+    return h;
+  }
+  if (run.size() != 5)
+    throw Error(fmt::format("checkpoint '{}': {}: attribute heat must have 5 entries, not {}",
+                            file.path(), group, run.size()));
+  h.known = true;
+  h.enthalpyInitial = run[0];
+  h.inflowIn = run[3];
+  const std::string shares = group + "/heat_shares";
+  if (!file.exists(shares)) {
+    if (file.comm().isRoot()) {
+      h.wallIn = run[1];
+      h.extIn = run[2];
+      h.outflowOut = run[4];
+    }
+    return h;
+  }
+  const auto rows = readParticleVec3(file, shares, evenRows(file.comm(), file.shape(shares)[0]));
+  for (std::size_t k = 0; k < rows[0].size(); ++k) {
+    h.wallIn += rows[0][k];
+    h.extIn += rows[1][k];
+    h.outflowOut += rows[2][k];
+  }
+  return h;
+}
+}  // namespace
+
 void writeDemState(H5File& file, const std::string& group, const dem::DemState& s) {
   const auto& p = s.particles;
   const std::size_t n = p.nOwned;
@@ -365,6 +418,7 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
     const std::vector<double> flow = s.flow.pack();  // particle inflow/outflow tallies
     file.setAttribute(group, "flow", std::span<const double>(flow));
   }
+  writeDemHeat(file, group, s.heat);
   const std::string cg = group + "/contacts";
   file.createGroup(cg);
   const std::size_t m = s.contacts.size();
@@ -421,6 +475,7 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
   s.steps = file.attributeInt(group, "steps");
   s.rebuilds = file.attributeInt(group, "rebuilds");
   s.flow = dem::DemFlow::unpack(file.attributeDoubles(group, "flow"));
+  s.heat = readDemHeat(file, group);
   const std::string cg = group + "/contacts";
   const RowRange rc = evenRows(comm, file.attributeInt(cg, "count"));
   const auto holder = readParticleArray<std::int64_t>(file, cg + "/holder", rc);
@@ -474,6 +529,15 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
       if (i < x0.size() && !std::isfinite(x0[i]))
         bad("x_rebuild", i, "has a rebuild position that is not finite");
     }
+  }
+  {
+    const auto& h = s.heat;
+    for (const double v : {h.enthalpyInitial, h.inflowIn, h.wallIn, h.extIn, h.outflowOut})
+      if (err.empty() && !std::isfinite(v))
+        err = fmt::format(
+            "{}: the energy accounts (heat, heat_shares) hold a value that is not "
+            "finite",
+            group);
   }
   // Ids unique over all ranks, and every contact history held by (and pointing at) an existing
   // particle: every rank gathers the sorted ids (8 bytes a particle, once at a restart).
