@@ -533,7 +533,7 @@ void Simulation::writeOutput(OutputWriter& out) {
         OutputField::scalar("p", f.p, "m^2/s^2"),  // kinematic: p / rho
         OutputField::vector("u", uCell_, "m/s"), OutputField::scalar("eps", f.eps, "1"),
         OutputField::scalar("K", f.K, "1/s")};
-    if (!f.T.data().empty()) fields.push_back(OutputField::scalar("T", f.T, "K"));  // fluid.heat
+    if (fluid_->hasHeat()) fields.push_back(OutputField::scalar("T", f.T, "K"));  // fluid.heat
     out.writeFields(run_.steps, run_.time, fields);
   }
   if (dem_ && out.options().particles) {

@@ -88,6 +88,9 @@ FluidSolver::~FluidSolver() = default;
 const FluidFields& FluidSolver::fields() const {
   return impl_->f;
 }
+bool FluidSolver::hasHeat() const {
+  return impl_->prm.heat.on;
+}
 FluidFields& FluidSolver::edit() {
   auto& m = *impl_;
   m.uGhostsFresh = false;

@@ -99,6 +99,8 @@ class FluidSolver {
 
   /// The state, read only (no effect on the solver).
   const FluidFields& fields() const;
+  /// fluid.heat is on: the fields have T and heatSource, the counters their energy accounts.
+  bool hasHeat() const;
   /// The state, to write outside a step (initial conditions, tests, restart): the next step
   /// refreshes every ghost layer and rebuilds the pressure matrix, and nextDt() recomputes the
   /// velocity rate.
