@@ -557,6 +557,28 @@ void Simulation::writeOutput(OutputWriter& out) {
   }
 }
 
+double energyBalance(const Json& fluid, const Json& particles) {
+  // Fluid and particles together: what the two enthalpies gained equals what came in through
+  // the box faces (fluid), the walls (particle contacts) and the particles' inflow and outflow;
+  // the convective exchange between them (the fluid's source_heat, the particles' ext_heat_in)
+  // is internal and cancels. Relative to the largest of the enthalpies and the gross heat in.
+  double faces = 0, gross = 0;
+  for (const auto& [face, q] : fluid["face_heat"].items()) {
+    faces += q.get<double>();
+    gross += std::abs(q.get<double>());
+  }
+  const double H = fluid["enthalpy"].get<double>() + particles["enthalpy"].get<double>();
+  const double H0 =
+      fluid["enthalpy_initial"].get<double>() + particles["enthalpy_initial"].get<double>();
+  const double wall = particles["wall_heat_in"].get<double>(),
+               in = particles["inflow_enthalpy_in"].get<double>(),
+               out = particles["outflow_enthalpy_out"].get<double>();
+  const double residual = std::abs(H - H0 - (faces + wall + in - out));
+  const double scale =
+      std::max({std::abs(H), std::abs(H0), gross + std::abs(wall) + std::abs(in) + std::abs(out)});
+  return scale > 0 ? residual / scale : (residual > 0 ? 1.0 : 0.0);
+}
+
 Json Simulation::report(double wallSeconds) const {
   const Comm& comm = dec_.comm();
   Json out = timers_.report(comm, wallSeconds);
@@ -590,6 +612,8 @@ Json Simulation::report(double wallSeconds) const {
   }
   if (dem_) out["particles"] = dem_->diagnostics();
   if (dem_) out["checks"]["particle_mass_balance"] = out["particles"]["mass_balance"];
+  if (out.contains("fluid_heat") && dem_ && out["particles"].contains("heat"))
+    out["checks"]["energy_balance"] = energyBalance(out["fluid_heat"], out["particles"]["heat"]);
   out["partition"] = {{"strategy", layouts_.strategy},
                       {"fluid_dims", dimsJson(dec_)},
                       {"particle_dims", dimsJson(particleDecomposition())}};

@@ -111,6 +111,7 @@ TEST(Convection, SingleSphereCoolsAtRanzMarshallRate) {
   // The water stays at its temperature to within 1e-6 of the difference.
   const Json r = sim.report(1.0);
   EXPECT_LT(r["checks"]["heat_exchange_balance"].get<double>(), 1e-12);
+  EXPECT_LT(r["checks"]["energy_balance"].get<double>(), 1e-12);
   EXPECT_LT(r["coupling"]["heat_transfer"]["biot_max"].get<double>(), 0.1);
   const auto& T = sim.fluid()->fields().T;
   double tMax = 0;
@@ -192,6 +193,8 @@ TEST(Convection, StiffExchangeStaysBoundedAndConservesEnergy) {
       "T in [%.6f, %.6f] K\n",
       cf, cp, teq, sim.steps(), now[2], now[3]);
   EXPECT_LE(sim.heatBalance(), 1e-12);
+  const Json report = sim.report(1.0);
+  EXPECT_LE(report["checks"]["energy_balance"].get<double>(), 1e-12);
   EXPECT_NEAR(now[2], teq, 1e-3 * (Tp0 - Tf0));
   EXPECT_NEAR(now[3], teq, 1e-3 * (Tp0 - Tf0));
 }

@@ -72,6 +72,11 @@ namespace coloc::coupling {
 
 class ParticleCoupling;
 
+/// checks.energy_balance of a run with heat on both sides: |gain of the fluid's and the
+/// particles' enthalpies - heat in through faces, walls and the particles' inflow and outflow|,
+/// relative (the reports' fluid_heat and particles.heat objects).
+double energyBalance(const Json& fluidHeat, const Json& particleHeat);
+
 /// Declares the "coupling.*" keys.
 void declareConfig(Schema& s);
 /// The schema of a whole case file: run, domain, partition, fluid, particles, coupling.
