@@ -39,17 +39,7 @@ HeatLaw heatLawFromConfig(const Config& cfg) {
 }
 
 double nusselt(HeatLaw law, double eps, double re, double pr) {
-  const double pr3 = std::cbrt(pr);
-  switch (law) {
-    case HeatLaw::RanzMarshall:
-      return 2.0 + 0.6 * std::sqrt(re) * pr3;
-    case HeatLaw::Gunn:
-      return (7.0 - 10.0 * eps + 5.0 * eps * eps) * (1.0 + 0.7 * std::pow(re, 0.2) * pr3) +
-             (1.33 - 2.4 * eps + 1.2 * eps * eps) * std::pow(re, 0.7) * pr3;
-    case HeatLaw::None:
-      break;
-  }
-  return 0.0;
+  return nusseltPr3(law, eps, re, std::cbrt(pr));
 }
 
 }  // namespace coloc::coupling

@@ -29,7 +29,7 @@ ParticleCoupling::ParticleCoupling(const Config& cfg, const Decomposition& dec, 
       heatLaw_(heatLawFromConfig(cfg)) {
   if (!convects()) return;
   kF_ = cfg.number("fluid.conductivity");
-  prandtl_ = rhoF_ * nu_ * cfg.number("fluid.heat_capacity") / kF_;
+  prandtl3_ = std::cbrt(rhoF_ * nu_ * cfg.number("fluid.heat_capacity") / kF_);
   if (!(kF_ > 0))
     throw ConfigError("fluid.conductivity",
                       "convection (coupling.heat_transfer) needs a fluid conductivity > 0");
@@ -170,7 +170,7 @@ void ParticleCoupling::exchangeHeatOn(std::size_t first, std::size_t count, doub
                  s2 = uAt_[2][i] - p.v[2][i];
     const double eps = std::clamp(epsAt_[i], epsMin_, 1.0), d = 2.0 * p.radius[i];
     const double re = eps * d * std::sqrt(s0 * s0 + s1 * s1 + s2 * s2) / nu_;
-    const double nu = nusselt(heatLaw_, eps, re, prandtl_);
+    const double nu = nusseltPr3(heatLaw_, eps, re, prandtl3_);
     const auto mat = static_cast<std::size_t>(p.material[i]);
     // H = h A = Nu k_f / d * pi d^2; the particle's backward-Euler response over dt.
     const double H = nu * kF_ * kPi * d;

@@ -134,10 +134,10 @@ class ParticleCoupling {
   // The first particle the drag evaluation of this step could not treat (empty: none), raised
   // on every rank at the end of evaluateDrag.
   std::string failure_;
-  // Convection: the law, the fluid's conductivity k_f and Prandtl number, the materials' heat
+  // Convection: the law, the fluid's conductivity k_f and Pr^(1/3), the materials' heat
   // capacities and conductivities.
   HeatLaw heatLaw_ = HeatLaw::None;
-  double kF_ = 0, prandtl_ = 1, biotMax_ = 0;
+  double kF_ = 0, prandtl3_ = 1, biotMax_ = 0;
   std::vector<double> cpOfMaterial_, kOfMaterial_;
 
   // The particles of the view (grow-only buffers): 15 doubles and a compact stencil a particle.

@@ -52,6 +52,7 @@ void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {
   const int* mat = p.material.data();
   const int* nbr = s.list().nbr.data();
   const int* rowStart = s.list().rowStart.data();
+  const int* slot = s.listSlots();
   const int* items = s.bins().binItems.data();
   const bool walls = wallT > 0;
   double wallRate = 0;
@@ -62,6 +63,10 @@ void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {
     const double xi[3] = {X0[i], X1[i], X2[i]};
     const double ri = R[i];
     for (int e = e0; e < e1; ++e) {
+      // Only the entries the last force pass found touching (those holding a history slot):
+      // the others are skipped without reading their partner (the test below would reject
+      // them with the same operands).
+      if (slot[e] < 0) continue;
       const int j = nbr[e];
       if (j >= 0) {
         const auto u = static_cast<std::size_t>(j);

@@ -42,6 +42,8 @@ class NeighbourSearch {
   /// The history slot of each list entry (list order), writable: the force pass takes a slot
   /// when a contact starts and frees it when it ends.
   int* listSlots() { return list_.slot.data(); }
+  /// The same, read only: after a force pass an entry has a slot exactly when it touches.
+  const int* listSlots() const { return list_.slot.data(); }
   /// The history pool reduced to the slots the list holds (restore: the rows held every
   /// history twice, under both particles of a pair).
   void compactHistory() { hist_.compact(list_.slot); }

@@ -16,6 +16,7 @@
 // Ranz–Marshall does).
 #pragma once
 
+#include <cmath>
 #include <string>
 
 #include "coloc/core/config.hpp"
@@ -33,5 +34,21 @@ HeatLaw heatLawFromConfig(const Config& cfg);
 
 /// Nu of one particle (law None: 0). re >= 0, pr > 0, eps in (0, 1].
 double nusselt(HeatLaw law, double eps, double re, double pr);
+/// The same with Pr^(1/3) given (a run's Prandtl number is one constant): Re^0.2 and Re^0.7 as
+/// exp(a log Re), one logarithm for both. Equal to nusselt() to within 1e-14 relative.
+inline double nusseltPr3(HeatLaw law, double eps, double re, double pr3) {
+  switch (law) {
+    case HeatLaw::RanzMarshall:
+      return 2.0 + 0.6 * std::sqrt(re) * pr3;
+    case HeatLaw::Gunn: {
+      const double l = std::log(re);
+      return (7.0 - 10.0 * eps + 5.0 * eps * eps) * (1.0 + 0.7 * std::exp(0.2 * l) * pr3) +
+             (1.33 - 2.4 * eps + 1.2 * eps * eps) * std::exp(0.7 * l) * pr3;
+    }
+    case HeatLaw::None:
+      break;
+  }
+  return 0.0;
+}
 
 }  // namespace coloc::coupling
