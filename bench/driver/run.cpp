@@ -502,6 +502,12 @@ int Run::finish(std::optional<SnapshotJob>& snapshot) {
     lastCheckpoint_ = path;
   }
   if (root_) series_->sync();
+  if (root_ && simulation_->biotMax() > coupling::Simulation::kBiotLimit)
+    log_.err(
+        "coloc: warning: particle Biot number up to {:.3g} (> {:g}): the lumped-capacitance "
+        "particle temperature (particles.heat) is no longer accurate; report.json "
+        "coupling.heat_transfer.biot_max\n",
+        simulation_->biotMax(), coupling::Simulation::kBiotLimit);
   if (root_ && unconvergedWarned_ > 0)
     log_.err(
         "coloc: warning: {} pressure solve(s) of this run did not converge "

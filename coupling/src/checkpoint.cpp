@@ -196,6 +196,7 @@ void forEachRunCounter(C& c, Fn&& fn) {
   fn("fluid_accel_l1", c.accelL1);
   fn("particle_drag_impulse", c.particleImpulse);
   fn("fluid_drag_impulse", c.fluidImpulse);
+  fn("heat_exchange_residual", c.heatResidual);
 }
 }  // namespace
 
@@ -218,6 +219,12 @@ RunCounters readRunCounters(H5File& file, const std::string& group) {
       for (std::size_t d = 0; d < 3 && d < a.size(); ++d) v[d] = a[d];
     } else if constexpr (std::is_same_v<T, long long>) {
       v = file.attributeInt(group, name);
+    } else if (std::string_view(name) == "heat_exchange_residual") {
+      try {  // absent from checkpoints written before convection
+        v = file.attributeDouble(group, name);
+      } catch (const Error&) {
+        v = 0;
+      }
     } else {
       v = file.attributeDouble(group, name);
     }

@@ -24,6 +24,11 @@ void declareConfig(Schema& s) {
            "without the particle's own volume and the pressure-gradient force loses the "
            "particle's own share; trilinear kernel, no smoothing, cubic cells; docs/coupling.md)",
            {"none", "stokeslet"});
+  s.string("coupling.heat_transfer", "none",
+           "fluid-particle convection (needs fluid.heat and particles.heat): none, ranz_marshall "
+           "(a single sphere), gunn (beds, Gunn 1978); q = Nu k_f pi d (T_f - T_p) into each "
+           "particle, the opposite into the fluid cells of its stencil (docs/heat.md)",
+           {"none", "ranz_marshall", "gunn"});
   s.integer("coupling.dem_substeps", 0,
             "DEM steps per step. coupled, dummy_dem: the CFD step is dem_substeps * particles.dt "
             "(fluid.dt and fluid.adaptive_dt are then not used); 0: the largest whole number of "

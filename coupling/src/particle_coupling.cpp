@@ -25,7 +25,19 @@ ParticleCoupling::ParticleCoupling(const Config& cfg, const Decomposition& dec, 
       frozen_(frozen),
       epsMin_(cfg.number("coupling.eps_min")),
       rhoF_(cfg.number("fluid.rho")),
-      nu_(cfg.number("fluid.nu")) {}
+      nu_(cfg.number("fluid.nu")),
+      heatLaw_(heatLawFromConfig(cfg)) {
+  if (!convects()) return;
+  kF_ = cfg.number("fluid.conductivity");
+  prandtl_ = rhoF_ * nu_ * cfg.number("fluid.heat_capacity") / kF_;
+  if (!(kF_ > 0))
+    throw ConfigError("fluid.conductivity",
+                      "convection (coupling.heat_transfer) needs a fluid conductivity > 0");
+  for (const auto& m : cfg.at("particles.materials")) {
+    cpOfMaterial_.push_back(m["heat_capacity"].get<double>());
+    kOfMaterial_.push_back(m["conductivity"].get<double>());
+  }
+}
 
 void ParticleCoupling::resize(std::size_t n) {
   if (volume_.size() >= n) return;
@@ -33,6 +45,8 @@ void ParticleCoupling::resize(std::size_t n) {
   for (auto* v : {&volume_, &beta_, &epsAt_}) v->resize(cap);
   for (int d = 0; d < 3; ++d)
     for (auto* a : {&uAt_, &vDep_, &gradPAt_, &ownPressure_}) (*a)[d].resize(cap);
+  if (convects())
+    for (auto* v : {&TAt_, &hEff_, &heatRate_}) v->resize(cap);
 }
 
 void ParticleCoupling::locate(const ParticleView& view, const FieldLayout& layout) {
@@ -63,22 +77,27 @@ void ParticleCoupling::evaluateDrag(const DragFields* fields, double dt, double 
   const std::size_t n = stencils_.count();
   const bool self = selfVelocity_ != SelfVelocity::None;
   failure_.clear();
+  biotMax_ = 0;
+  const std::size_t nFields = convects() ? 8 : 7;
   // Range by range (kSampleChunk particles): the fields sampled at them, then the drag, which
   // reads the sampled values while they are still in cache. Each phase is timed as its own.
   for (std::size_t s0 = 0; s0 < n; s0 += kSampleChunk) {
     const std::size_t sn = std::min(kSampleChunk, n - s0);
     if (fields) {
-      // The 7 fields at these particles in one pass over their stencils (kernel.hpp), just
+      // The 7 (8) fields at these particles in one pass over their stencils (kernel.hpp), just
       // before the drag reads them (still in cache).
       ScopedPhase ts(*timers_, Phase::CouplingInterpolate);
-      double* out[7] = {epsAt_.data() + s0};
+      double* out[8] = {epsAt_.data() + s0};
       for (int d = 0; d < 3; ++d) {
         out[1 + d] = uAt_[d].data() + s0;
         out[4 + d] = gradPAt_[d].data() + s0;
       }
-      interpolate(stencils_, *fields, out, s0, sn);
+      if (convects()) out[7] = TAt_.data() + s0;
+      interpolate(stencils_, std::span<const CellField* const>(fields->data(), nFields),
+                  std::span<double* const>(out, nFields), s0, sn);
     }
     evaluateDragOn(s0, sn, dt, time);
+    if (convects()) exchangeHeatOn(s0, sn, dt, fields != nullptr);
   }
   if (self) dec_->comm().raiseIfAny(failure_);
 }
@@ -137,6 +156,35 @@ void ParticleCoupling::evaluateDragOn(std::size_t first, std::size_t count, doub
         out[j] = velocityWithoutDrag(v[j], force[j] - held[j], vol[j], gradP[j], dt, mass[j]);
     }
   }
+}
+
+void ParticleCoupling::exchangeHeatOn(std::size_t first, std::size_t count, double dt,
+                                      bool sampled) {
+  const ParticleView& p = view_;
+  const std::size_t last = first + count;
+  if (!sampled) {
+    std::fill(hEff_.begin() + static_cast<std::ptrdiff_t>(first),
+              hEff_.begin() + static_cast<std::ptrdiff_t>(last), 0.0);
+    std::fill(heatRate_.begin() + static_cast<std::ptrdiff_t>(first),
+              heatRate_.begin() + static_cast<std::ptrdiff_t>(last), 0.0);
+    return;
+  }
+  double biot = biotMax_;
+  for (std::size_t i = first; i < last; ++i) {
+    const double s0 = uAt_[0][i] - p.v[0][i], s1 = uAt_[1][i] - p.v[1][i],
+                 s2 = uAt_[2][i] - p.v[2][i];
+    const double eps = std::clamp(epsAt_[i], epsMin_, 1.0), d = 2.0 * p.radius[i];
+    const double re = eps * d * std::sqrt(s0 * s0 + s1 * s1 + s2 * s2) / nu_;
+    const double nu = nusselt(heatLaw_, eps, re, prandtl_);
+    const auto mat = static_cast<std::size_t>(p.material[i]);
+    // H = h A = Nu k_f / d * pi d^2; the particle's backward-Euler response over dt.
+    const double H = nu * kF_ * kPi * d;
+    const double capacity = p.mass[i] * cpOfMaterial_[mat];
+    hEff_[i] = dt > 0 ? H / (1.0 + dt * H / capacity) : H;
+    heatRate_[i] = hEff_[i] * (TAt_[i] - p.temperature[i]);
+    biot = std::max(biot, nu * kF_ / (6.0 * kOfMaterial_[mat]));
+  }
+  biotMax_ = biot;
 }
 
 void ParticleCoupling::respondToDrag(std::size_t i, double eps, double slip, double beta, double dt,
@@ -219,17 +267,19 @@ double ParticleCoupling::correctForSelfVelocity(std::size_t i, double epsFluid,
   return denom;
 }
 
-void ParticleCoupling::deposit(CellField& solid, CellField& K,
-                               const std::array<CellField*, 3>& KUp) const {
+void ParticleCoupling::deposit(CellField& solid, CellField& K, const std::array<CellField*, 3>& KUp,
+                               CellField* heatSource, CellField* heatCoefficient) const {
   const double vCell = dec_->grid().cellVolume();
   const double s = 1.0 / (rhoF_ * vCell);
-  // The 5 deposits in one pass over the stencils (kernel.hpp); beta v~ is formed, not stored.
-  const DepositTerm terms[5] = {{volume_.data(), nullptr, 1.0 / vCell, &solid},
-                                {beta_.data(), nullptr, s, &K},
-                                {beta_.data(), vDep_[0].data(), s, KUp[0]},
-                                {beta_.data(), vDep_[1].data(), s, KUp[1]},
-                                {beta_.data(), vDep_[2].data(), s, KUp[2]}};
-  coupling::deposit(stencils_, terms);
+  // The 5 deposits (7 with convection) in one pass over the stencils (kernel.hpp); beta v~ is
+  // formed, not stored.
+  const DepositTerm terms[7] = {
+      {volume_.data(), nullptr, 1.0 / vCell, &solid}, {beta_.data(), nullptr, s, &K},
+      {beta_.data(), vDep_[0].data(), s, KUp[0]},     {beta_.data(), vDep_[1].data(), s, KUp[1]},
+      {beta_.data(), vDep_[2].data(), s, KUp[2]},     {heatRate_.data(), nullptr, -1.0, heatSource},
+      {hEff_.data(), nullptr, 1.0, heatCoefficient}};
+  const bool heat = convects() && heatSource && heatCoefficient;
+  coupling::deposit(stencils_, std::span<const DepositTerm>(terms, heat ? 7 : 5));
 }
 
 void ParticleCoupling::sampleForForces(const ForceFields& fields) {
@@ -254,6 +304,15 @@ void ParticleCoupling::applyForces(const std::array<double*, 3>& out, double dt,
       sums[d] += drag * dt;
       sums[6 + d] += beta_[i] * (std::abs(uAt_[d][i]) + std::abs(vDep_[d][i])) * dt;
     }
+  }
+}
+
+void ParticleCoupling::applyHeat(double* out, double dt, double sums[2]) const {
+  const std::size_t n = stencils_.count();
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = heatRate_[i];
+    sums[0] += heatRate_[i] * dt;
+    sums[1] += std::abs(heatRate_[i]) * dt;
   }
 }
 

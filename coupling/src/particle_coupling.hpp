@@ -8,11 +8,20 @@
 // halo work stay with the Simulation, which calls these in the order of the step:
 //
 //   locate()          stencils and volumes of the particles of the view
-//   evaluateDrag()    range by range: the 7 drag fields sampled, beta from the law, the response
-//   deposit()         V_p, beta', beta' v~ -> solid, K, K u_p (one pass over the stencils)
+//   evaluateDrag()    range by range: the 7 drag fields sampled (8 with convection: T), beta from
+//                     the law, the response; with convection each particle's heat rate q
+//   deposit()         V_p, beta', beta' v~ -> solid, K, K u_p (one pass over the stencils), and
+//                     with convection -q -> the fluid's heat source, H' -> its coefficient
 //   sampleForForces() u^{n+1}, grad p^{n+1} at the particles (one pass)
 //   applyForces()     F = beta' (u - v~) - V_p rho_f grad p (+ the self-velocity share)
+//   applyHeat()       q of each particle to the DEM's heat_ext (convection)
 //
+// Convection (coupling.heat_transfer, heat_transfer.hpp): q = H' (T_f - T_p) with H = Nu k_f pi d
+// and H' = H / (1 + dt H / (m c_p)), the particle's backward-Euler response over the step (as
+// beta' for the drag): a particle whose thermal time is shorter than the step relaxes to the
+// fluid's temperature without overshoot. T_f, T_p: at the start of the step. The fluid cells
+// receive -q through the same stencil, so the heat the particles gain over the step is the heat
+// the fluid loses, to round-off.
 // The response (simulation.hpp's header comment): beta' = beta / (1 + dt beta / m) and
 // v~ = v + dt (f_nondrag - V_p rho_f grad p) / m, written once (responseDenominator(),
 // velocityWithoutDrag()) and used both by the array-at-a-time common case and by the
@@ -27,6 +36,7 @@
 #include "coloc/core/config.hpp"
 #include "coloc/core/timers.hpp"
 #include "coloc/coupling/drag.hpp"
+#include "coloc/coupling/heat_transfer.hpp"
 #include "coloc/coupling/kernel.hpp"
 #include "coloc/coupling/self_velocity.hpp"
 #include "coloc/coupling/transfer.hpp"
@@ -37,8 +47,8 @@ namespace coloc::coupling {
 
 class ParticleCoupling {
  public:
-  /// The 7 fields the drag samples: eps, u (3), grad p (3).
-  using DragFields = std::array<const CellField*, 7>;
+  /// The fields the drag samples: eps, u (3), grad p (3), and with convection T (the 8th).
+  using DragFields = std::array<const CellField*, 8>;
   /// The 6 fields the forces sample: u (3), grad p (3).
   using ForceFields = std::array<const CellField*, 6>;
 
@@ -50,6 +60,12 @@ class ParticleCoupling {
   DragLaw dragLaw() const { return drag_; }
   double fluidDensity() const { return rhoF_; }
   double minFluidFraction() const { return epsMin_; }
+  /// With fluid-particle convection (coupling.heat_transfer other than none).
+  bool convects() const { return heatLaw_ != HeatLaw::None; }
+  HeatLaw heatLaw() const { return heatLaw_; }
+  /// The largest Biot number h d / (6 k_p) of the particles of the last evaluateDrag (0 without
+  /// convection): lumped capacitance holds well below 0.1.
+  double biotMax() const { return biotMax_; }
   std::size_t count() const { return stencils_.count(); }
 
   /// The stencils of the particles of `view` on fields of `layout`, and their volumes.
@@ -61,13 +77,18 @@ class ParticleCoupling {
   /// Collective with coupling.self_velocity (a particle too large for the model).
   void evaluateDrag(const DragFields* fields, double dt, double time);
   /// solid += V_p / V_cell, K += beta' / (rho_f V_cell), K u_p += beta' v~ / (rho_f V_cell) in
-  /// one pass over the stencils (the fields as they are: the caller zeroes them).
-  void deposit(CellField& solid, CellField& K, const std::array<CellField*, 3>& KUp) const;
+  /// one pass over the stencils (the fields as they are: the caller zeroes them); with
+  /// convection in the same pass heatSource += -q (W) and heatCoefficient += H' (W/K).
+  void deposit(CellField& solid, CellField& K, const std::array<CellField*, 3>& KUp,
+               CellField* heatSource = nullptr, CellField* heatCoefficient = nullptr) const;
   /// u^{n+1}, grad p^{n+1} at the particles.
   void sampleForForces(const ForceFields& fields);
   /// The coupling force of each particle into out[d][i]; adds to sums[d] the particles' drag
   /// impulse over dt and to sums[6 + d] the gross exchanged momentum sum beta' (|u| + |v~|) dt.
   void applyForces(const std::array<double*, 3>& out, double dt, double sums[9]) const;
+  /// Convection: the heat rate q of each particle into out[i] (W); adds to sums[0] the heat the
+  /// particles receive over dt and to sums[1] the gross sum |q| dt.
+  void applyHeat(double* out, double dt, double sums[2]) const;
 
  private:
   /// beta' = beta / responseDenominator(): the implicit response over dt of a particle of mass m.
@@ -81,6 +102,9 @@ class ParticleCoupling {
     return v + dt * (nonDrag - volume * rhoF_ * gradP) / m;
   }
   void resize(std::size_t n);
+  /// Convection on particles first .. first + count - 1: H' and q from the sampled fields
+  /// (`sampled` false, at set-up: none, q = 0).
+  void exchangeHeatOn(std::size_t first, std::size_t count, double dt, bool sampled);
   /// The drag on particles first .. first + count - 1.
   void evaluateDragOn(std::size_t first, std::size_t count, double dt, double time);
   /// Particle i's implicit response to its drag coefficient beta (the law's value at eps, slip);
@@ -106,11 +130,17 @@ class ParticleCoupling {
   // The first particle the drag evaluation of this step could not treat (empty: none), raised
   // on every rank at the end of evaluateDrag.
   std::string failure_;
+  // Convection: the law, the fluid's conductivity k_f and Prandtl number, the materials' heat
+  // capacities and conductivities.
+  HeatLaw heatLaw_ = HeatLaw::None;
+  double kF_ = 0, prandtl_ = 1, biotMax_ = 0;
+  std::vector<double> cpOfMaterial_, kOfMaterial_;
 
   // The particles of the view (grow-only buffers): 15 doubles and a compact stencil a particle.
   ParticleView view_;
   Stencils stencils_;
   std::vector<double> volume_, beta_, epsAt_;
+  std::vector<double> TAt_, hEff_, heatRate_;  // convection: T_f at the particle, H', q
   std::array<std::vector<double>, 3> uAt_, vDep_, gradPAt_;
   /// coupling.self_velocity: V k_d per particle, its own pressure-gradient force per unit drag
   /// (SelfResponse::pressure), from evaluateDrag to applyForces of the same step.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "coloc/core/error.hpp"
+#include "coloc/coupling/heat_transfer.hpp"
 #include "coloc/coupling/simulation.hpp"
 #include "coloc/coupling/transfer.hpp"
 #include "coloc/dem/dem.hpp"
@@ -20,7 +21,27 @@ constexpr int kFluidGhost = 2, kCouplingGhost = 1;
 // the proxy transfer's row and the force sent back (coupling/transfer.hpp).
 const long long kGhostUpdate =
     static_cast<long long>(dem::rowWidth(dem::ParticleStore{}, dem::kOpGhostUpdate));
-constexpr long long kProxyRow = kProxyRowDoubles, kForceRow = kForceRowDoubles;
+
+/// The widths that depend on the case's physics: heat adds the particle temperature to the DEM's
+/// ghost update (its one kOpGhostUpdate extra field, dem/src/heat.cpp), one gather of the fluid's
+/// T per heat sub-step (the plan counts one: the report's fluid_heat.substeps_last says how many
+/// a step took), and convection the temperature and material to the proxy rows, the heat rate to
+/// the rows back and two deposited fields (the heat source and its coefficient).
+struct Widths {
+  long long ghostUpdate = kGhostUpdate, proxyRow = kProxyRowDoubles, forceRow = kForceRowDoubles;
+  int deposited = 5, temperatureHalos = 0;
+};
+Widths widthsOf(const Config& cfg, bool coupled) {
+  Widths w;
+  if (cfg.boolean("particles.heat")) w.ghostUpdate += 1;
+  if (cfg.boolean("fluid.heat")) w.temperatureHalos = 1;
+  if (coupled && heatLawFromName(cfg.string("coupling.heat_transfer")) != HeatLaw::None) {
+    w.proxyRow += kProxyHeatDoubles;
+    w.forceRow += kHeatRowDoubles;
+    w.deposited = 7;
+  }
+  return w;
+}
 
 std::size_t k(Traffic t) {
   return static_cast<std::size_t>(t);
@@ -125,6 +146,7 @@ LayoutPlan planBoxes(const PlanCase& pc, const StrategyInput& in, const Strategy
   const bool demOn = pc.mode != RunMode::FluidOnly;
   const bool coupled = pc.mode == RunMode::Coupled || pc.mode == RunMode::DummyDem;
   const BoxLayout& L = layout.fluid;
+  const Widths w = widthsOf(cfg, coupled);
   dem::BinLayout bins;
   try {
     // The boxes under the case's cost, as the bisection measures them (a fluid-only run's boxes
@@ -159,6 +181,8 @@ LayoutPlan planBoxes(const PlanCase& pc, const StrategyInput& in, const Strategy
     auto& rk = out.rank;
     boxHalo(L, kFluidGhost, {0, 0, 0}, 6, false, 1, Traffic::FluidHalo, rk);
     boxHalo(L, kFluidGhost, {0, 0, 0}, 1, false, 1, Traffic::FluidHalo, rk);
+    if (w.temperatureHalos > 0)
+      boxHalo(L, kFluidGhost, {0, 0, 0}, 1, false, w.temperatureHalos, Traffic::FluidHalo, rk);
     for (int c = 0; c < 3; ++c) {
       Int3 s{0, 0, 0};
       s[c] = 1;
@@ -166,7 +190,7 @@ LayoutPlan planBoxes(const PlanCase& pc, const StrategyInput& in, const Strategy
     }
     if (coupled) {
       boxHalo(L, kFluidGhost, {0, 0, 0}, 3, false, 1, Traffic::FluidHalo, rk);
-      boxHalo(L, kCouplingGhost, {0, 0, 0}, 5, true, 1, Traffic::DepositSum, rk);
+      boxHalo(L, kCouplingGhost, {0, 0, 0}, w.deposited, true, 1, Traffic::DepositSum, rk);
     }
   }
   const double wc = cfg.number("partition.cost.cell"), wp = cfg.number("partition.cost.particle");
@@ -194,7 +218,7 @@ LayoutPlan planBoxes(const PlanCase& pc, const StrategyInput& in, const Strategy
       const int q = ownerOfCell(c);
       auto& Q = out.rank[static_cast<std::size_t>(q)];
       ++Q.particles;
-      if (coupled) Q.perStep[k(Traffic::ForceHandover)].bytes += kForceRow * kDouble;
+      if (coupled) Q.perStep[k(Traffic::ForceHandover)].bytes += w.forceRow * kDouble;
       // Ghosts: every box (periodic images included) whose range-widened bounds hold the
       // particle; the owner's own image at shift 0 is the particle itself.
       std::array<std::array<double, 3>, 3> shifts{};
@@ -232,7 +256,7 @@ LayoutPlan planBoxes(const PlanCase& pc, const StrategyInput& in, const Strategy
               if (!in) continue;
               ++out.rank[static_cast<std::size_t>(r)].demGhosts;
               if (r == q) continue;
-              Q.perStep[k(Traffic::DemGhost)].bytes += out.substeps * kGhostUpdate * kDouble;
+              Q.perStep[k(Traffic::DemGhost)].bytes += out.substeps * w.ghostUpdate * kDouble;
               auto& dq = dests[static_cast<std::size_t>(q)];
               if (std::find(dq.begin(), dq.end(), r) == dq.end()) dq.push_back(r);
             }
@@ -292,6 +316,7 @@ LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPl
   const bool demOn = pc.mode != RunMode::FluidOnly;
   const bool coupled = pc.mode == RunMode::Coupled || pc.mode == RunMode::DummyDem;
   const bool independent = layout.particleBlocks.has_value();
+  const Widths w = widthsOf(cfg, coupled);
   dem::BinLayout bins;
   try {
     out.fluid = *layout.fluidBlocks;
@@ -327,6 +352,7 @@ LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPl
     // Coupled, the step is followed by cellVelocity (faces again) and pressureGradient (3).
     halo(g, F, r, cell, 6, false, 1, fh);
     halo(g, F, r, cell, 1, false, 1, fh);
+    if (w.temperatureHalos > 0) halo(g, F, r, cell, 1, false, w.temperatureHalos, fh);
     const int faceGathers = coupled ? 3 : 2;
     for (int c = 0; c < 3; ++c) {
       Layout face = cell;
@@ -337,7 +363,7 @@ LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPl
       halo(g, F, r, cell, 3, false, 1, fh);
       const Layout one{n, kCouplingGhost, {0, 0, 0}};
       // (No Traffic::CouplingHalo: the coupling reads the fluid's eps, gathered above.)
-      halo(g, F, r, one, 5, true, 1, R.perStep[k(Traffic::DepositSum)]);
+      halo(g, F, r, one, w.deposited, true, 1, R.perStep[k(Traffic::DepositSum)]);
     }
   }
   if (!demOn) {
@@ -378,7 +404,7 @@ LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPl
   if (coupled) {
     if (!independent) {
       for (auto& R : out.rank)
-        R.perStep[k(Traffic::ForceHandover)].bytes += R.particles * kForceRow * kDouble;
+        R.perStep[k(Traffic::ForceHandover)].bytes += R.particles * w.forceRow * kDouble;
     } else {
       // Rows from DEM rank a to fluid rank b, and the forces back (booked by b).
       std::vector<std::vector<std::pair<int, long long>>> to(static_cast<std::size_t>(ranks));
@@ -398,11 +424,11 @@ LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPl
           auto& B = out.rank[static_cast<std::size_t>(b)];
           B.proxies += c;
           if (a == b) {
-            A.perStep[k(Traffic::ForceHandover)].bytes += c * (kProxyRow + kForceRow) * kDouble;
+            A.perStep[k(Traffic::ForceHandover)].bytes += c * (w.proxyRow + w.forceRow) * kDouble;
           } else {
-            A.perStep[k(Traffic::Proxy)].bytes += c * kProxyRow * kDouble;
+            A.perStep[k(Traffic::Proxy)].bytes += c * w.proxyRow * kDouble;
             ++A.perStep[k(Traffic::Proxy)].messages;
-            B.perStep[k(Traffic::Proxy)].bytes += c * kForceRow * kDouble;
+            B.perStep[k(Traffic::Proxy)].bytes += c * w.forceRow * kDouble;
             ++B.perStep[k(Traffic::Proxy)].messages;
           }
         }
@@ -446,7 +472,7 @@ LayoutPlan planBlocks(const PlanCase& pc, const StrategyLayout& layout, LayoutPl
         }
         if (peer != r) {
           auto& t = R.perStep[k(Traffic::DemGhost)];
-          t.bytes += out.substeps * sent * kGhostUpdate * kDouble;
+          t.bytes += out.substeps * sent * w.ghostUpdate * kDouble;
           // one message per neighbour with rows (the axis' plan: both faces' rows in one message
           // when both go to one rank; nothing to a neighbour without rows)
           if (sent > 0 && !(s == 1 && nLo == nHi && sentLo > 0)) t.messages += out.substeps;

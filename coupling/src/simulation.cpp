@@ -1,5 +1,7 @@
 #include "coloc/coupling/simulation.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -7,6 +9,7 @@
 #include "coloc/core/error.hpp"
 #include "coloc/core/fault.hpp"
 #include "coloc/coupling/checkpoint.hpp"
+#include "coloc/coupling/heat_transfer.hpp"
 #include "coloc/partition/remap.hpp"
 #include "coloc/partition/setup.hpp"
 #include "particle_coupling.hpp"
@@ -98,7 +101,10 @@ void Simulation::createParticles(Origin& origin) {
     dem_ = std::make_unique<dem::DemSolver>(particleDecomposition(), cfg_, timers_);
   }
   if (mode_ == RunMode::DummyDem) dem_->setFrozen(true);
-  transfer_ = demDec_ ? proxyTransfer(dec_, *dem_) : colocatedTransfer(*dem_);
+  // Convection (coupled modes): the transfer carries temperatures and heat rates too.
+  convects_ = (mode_ == RunMode::Coupled || mode_ == RunMode::DummyDem) &&
+              heatLawFromConfig(cfg_) != HeatLaw::None;
+  transfer_ = demDec_ ? proxyTransfer(dec_, *dem_, convects_) : colocatedTransfer(*dem_, convects_);
 }
 
 void Simulation::takeRunCounters(Origin& origin) {
@@ -118,6 +124,10 @@ void Simulation::createCoupling() {
   eps_ = CellField(layout);
   K_ = CellField(layout);
   for (auto& k : KUp_) k = CellField(layout);
+  if (convects_) {
+    heatSource_ = CellField(layout);
+    heatCoefficient_ = CellField(layout);
+  }
   for (int d = 0; d < 3; ++d) {
     uCell_[d] = CellField(layout);
     uCellOld_[d] = CellField(layout);
@@ -226,10 +236,12 @@ void Simulation::step() {
       waitForSlowestRank();
       sumDepositsAcrossBlocks();
       updateFluidCoefficients();
+      checkHeatSourceNumber(dt);
       advanceFluid(dt);
       refreshCellVelocity();
       sampleFluidForForces();
       applyCouplingForces(dt);
+      applyCouplingHeat(dt);
       handForcesToParticles();
       advanceParticles(static_cast<int>(nSub));
       run_.lastDt = dt;
@@ -277,6 +289,9 @@ Simulation::DragFields Simulation::fluidForDrag() {
     f[1 + d] = &sampled(uCell_[d], uSmooth_[d]);
     f[4 + d] = &sampled(gradP_[d], gradPSmooth_[d]);
   }
+  // Convection: T^n, its ghosts current after the fluid's step (zero gradient at walls: the
+  // mirror of the one layer the stencils reach).
+  if (convects_) f[7] = &sampled(fluid_->fields().T, TSmooth_);
   return f;
 }
 
@@ -290,7 +305,12 @@ void Simulation::depositParticles() {
   solid_.fill(0.0);
   K_.fill(0.0);
   for (auto& k : KUp_) k.fill(0.0);
-  coupling_->deposit(solid_, K_, {&KUp_[0], &KUp_[1], &KUp_[2]});
+  if (convects_) {
+    heatSource_.fill(0.0);
+    heatCoefficient_.fill(0.0);
+  }
+  coupling_->deposit(solid_, K_, {&KUp_[0], &KUp_[1], &KUp_[2]}, convects_ ? &heatSource_ : nullptr,
+                     convects_ ? &heatCoefficient_ : nullptr);
 }
 
 void Simulation::sumDepositsAcrossBlocks() {
@@ -298,11 +318,13 @@ void Simulation::sumDepositsAcrossBlocks() {
   // periodic wrap is arithmetic inside the block, like the fold at walls: booked to deposition
   // (so a 1-rank run shows no across-ranks share without bytes).
   ScopedPhase t(timers_, halo_.crossesRanks() ? Phase::ExchangeRemote : Phase::CouplingDeposit);
-  Field3<double>* fields[5] = {&solid_, &K_, &KUp_[0], &KUp_[1], &KUp_[2]};
-  halo_.scatterSum(fields, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
+  Field3<double>* fields[7] = {&solid_,  &K_,          &KUp_[0],         &KUp_[1],
+                               &KUp_[2], &heatSource_, &heatCoefficient_};
+  const std::span<Field3<double>* const> deposited(fields, convects_ ? 7 : 5);
+  halo_.scatterSum(deposited, Fold::Mirror, &timers_, Exchange::InterPhysicsRemote);
   if (smoothingPasses_ > 0) {
     ScopedPhase s(timers_, Phase::CouplingDeposit);
-    for (auto* fld : fields) smoothField(*fld);
+    for (auto* fld : deposited) smoothField(*fld);
   }
 }
 
@@ -323,8 +345,33 @@ void Simulation::updateFluidCoefficients() {
   run_.solidVolume = dec_.comm().sum(solid) * dec_.grid().cellVolume();
 }
 
+void Simulation::checkHeatSourceNumber(double dt) {
+  if (!convects_) return;
+  ScopedPhase t(timers_, Phase::CouplingDeposit);
+  const double capacity =
+      coupling_->fluidDensity() * cfg_.number("fluid.heat_capacity") * dec_.grid().cellVolume();
+  double worst = 0;
+  Int3 at{-1, -1, -1};
+  forEach(eps_.interior(), [&](int i, int j, int k) {
+    const double n = dt * heatCoefficient_(i, j, k) / (capacity * eps_(i, j, k));
+    if (n > worst) worst = n, at = {i, j, k};
+  });
+  std::string err;
+  if (worst > 1.0) {
+    const Int3 lo = dec_.lo(), g{lo[0] + at[0], lo[1] + at[1], lo[2] + at[2]};
+    err = fmt::format(
+        "convection (coupling.heat_transfer): in cell ({}, {}, {}) the particles would move the "
+        "fluid's temperature past theirs in one step (dt sum H / (rho_f c_f eps V) = {:.4g} > 1; "
+        "the fluid's heat source is explicit): shorten the step (fluid.dt, fluid.cfl or "
+        "coupling.dem_substeps) or use larger cells",
+        g[0], g[1], g[2], worst);
+  }
+  dec_.comm().raiseIfAny(err);
+  heatSourceNumber_ = std::max(heatSourceNumber_, dec_.comm().max(worst));
+}
+
 fv::CouplingInputs Simulation::fluidInputs() const {
-  return {eps_, K_, KUp_};
+  return {eps_, K_, KUp_, convects_ ? &heatSource_ : nullptr};
 }
 
 void Simulation::advanceFluid(double dt) {
@@ -389,6 +436,24 @@ void Simulation::applyCouplingForces(double dt) {
     diff = std::max(diff, std::abs(sums[d] + sums[3 + d]));
   }
   if (gross > 0) run_.momentumResidual = std::max(run_.momentumResidual, diff / gross);
+}
+
+void Simulation::applyCouplingHeat(double dt) {
+  if (!convects_) return;
+  ScopedPhase t(timers_, Phase::CouplingDrag);
+  // sums: the heat the particles receive over the step, the heat the fluid's cells received
+  // (their source, summed across blocks), the gross exchanged heat (the scale of round-off).
+  double sums[3] = {0, 0, 0};
+  double particle[2] = {0, 0};
+  coupling_->applyHeat(transfer_->heatTarget(), dt, particle);
+  sums[0] = particle[0];
+  sums[2] = particle[1];
+  forEach(heatSource_.interior(),
+          [&](int i, int j, int k) { sums[1] += heatSource_(i, j, k) * dt; });
+  dec_.comm().sumInPlace(std::span<double>(sums, 3));
+  biotMax_ = std::max(biotMax_, dec_.comm().max(coupling_->biotMax()));
+  if (sums[2] > 0)
+    run_.heatResidual = std::max(run_.heatResidual, std::abs(sums[0] + sums[1]) / sums[2]);
 }
 
 void Simulation::handForcesToParticles() {
@@ -571,6 +636,12 @@ Json Simulation::report(double wallSeconds) const {
         {"solid_volume", run_.solidVolume},
         {"kernel", coupling_->kernel() == KernelKind::Centroid ? "centroid" : "trilinear"},
         {"drag", dragLawName(coupling_->dragLaw())}};
+  if (convects_) {
+    out["coupling"]["heat_transfer"] = {{"law", heatLawName(coupling_->heatLaw())},
+                                        {"biot_max", biotMax_},
+                                        {"source_number_max", heatSourceNumber_}};
+    out["checks"]["heat_exchange_balance"] = run_.heatResidual;
+  }
   return out;
 }
 

@@ -14,7 +14,7 @@ namespace {
 
 class Colocated final : public ParticleTransfer {
  public:
-  explicit Colocated(dem::DemSolver& dem) : dem_(dem) {}
+  Colocated(dem::DemSolver& dem, bool heat) : dem_(dem), heat_(heat) {}
   ParticleView gather(Timers&) override {
     const auto& p = dem_.particles();
     ParticleView v;
@@ -28,6 +28,10 @@ class Colocated final : public ParticleTransfer {
     v.radius = p.radius.data();
     v.mass = p.mass.data();
     v.id = p.id.data();
+    if (heat_) {
+      v.temperature = p.field("temperature").data();
+      v.material = p.material.data();
+    }
     n_ = v.n;
     return v;
   }
@@ -35,21 +39,32 @@ class Colocated final : public ParticleTransfer {
     auto& p = dem_.particles();
     return {p.fExt[0].data(), p.fExt[1].data(), p.fExt[2].data()};
   }
+  double* heatTarget() override {
+    return heat_ ? dem_.particles().field("heat_ext").data() : nullptr;
+  }
   void handBack(Timers& timers) override {
-    // The forces are already in the DEM's own array: what crossed from one physics to the other
-    // is those bytes, in memory, with no copy and no message.
-    timers.book(Exchange::InterPhysicsLocal, static_cast<long long>(3 * n_ * sizeof(double)), 0);
+    // The forces (and heat rates) are already in the DEM's own arrays: what crossed from one
+    // physics to the other is those bytes, in memory, with no copy and no message.
+    const std::size_t perParticle = kForceRowDoubles + (heat_ ? kHeatRowDoubles : 0);
+    timers.book(Exchange::InterPhysicsLocal,
+                static_cast<long long>(perParticle * n_ * sizeof(double)), 0);
   }
 
  private:
   dem::DemSolver& dem_;
+  bool heat_ = false;
   std::size_t n_ = 0;
 };
 
 class Proxy final : public ParticleTransfer {
  public:
-  static constexpr int kRow = kProxyRowDoubles;  // x3 v3 nonDrag3 radius mass id
-  Proxy(const Decomposition& fluid, dem::DemSolver& dem) : dec_(fluid), dem_(dem) {}
+  // x3 v3 nonDrag3 radius mass id [temperature material]; back: force3 [heat rate]
+  Proxy(const Decomposition& fluid, dem::DemSolver& dem, bool heat)
+      : dec_(fluid),
+        dem_(dem),
+        heat_(heat),
+        row_(kProxyRowDoubles + (heat ? kProxyHeatDoubles : 0)),
+        back_(kForceRowDoubles + (heat ? kHeatRowDoubles : 0)) {}
 
   ParticleView gather(Timers& timers) override {
     const auto& p = dem_.particles();
@@ -74,11 +89,12 @@ class Proxy final : public ParticleTransfer {
       plan_.rebuild(std::span<const int>(dest_.data(), n));
     }
     // Rows packed straight into the plan's send buffer, in destination order.
-    const std::span<double> rows = plan_.packBuffer(kRow);
+    const std::span<double> rows = plan_.packBuffer(row_);
     const std::span<const int> order = plan_.exportIndex();
+    const double* T = heat_ ? p.field("temperature").data() : nullptr;
     for (std::size_t k = 0; k < n; ++k) {
       const auto i = static_cast<std::size_t>(order[k]);
-      double* row = rows.data() + k * kRow;
+      double* row = rows.data() + k * row_;
       for (int d = 0; d < 3; ++d) {
         double xd = p.x[d][i];
         if (g.periodic[d]) {  // wrap into the box: the fluid owner's block frame
@@ -92,10 +108,14 @@ class Proxy final : public ParticleTransfer {
       row[9] = p.radius[i];
       row[10] = p.mass[i];
       row[11] = static_cast<double>(p.id[i]);
+      if (heat_) {
+        row[12] = T[i];
+        row[13] = static_cast<double>(p.material[i]);
+      }
     }
     const std::size_t m = plan_.importCount();
-    grow(in_, m * kRow);
-    const PlanTraffic tr = plan_.forwardPacked(kRow, std::span<double>(in_.data(), m * kRow));
+    grow(in_, m * row_);
+    const PlanTraffic tr = plan_.forwardPacked(row_, std::span<double>(in_.data(), m * row_));
     if (radius_.size() < m) {
       const std::size_t cap = m + m / 4;
       for (int d = 0; d < 3; ++d)
@@ -103,9 +123,14 @@ class Proxy final : public ParticleTransfer {
       radius_.resize(cap);
       mass_.resize(cap);
       id_.resize(cap);
+      if (heat_) {
+        temperature_.resize(cap);
+        heatRate_.resize(cap);
+        material_.resize(cap);
+      }
     }
     for (std::size_t k = 0; k < m; ++k) {
-      const double* row = in_.data() + k * kRow;
+      const double* row = in_.data() + k * row_;
       for (int d = 0; d < 3; ++d) {
         x_[d][k] = row[d];
         v_[d][k] = row[3 + d];
@@ -114,6 +139,10 @@ class Proxy final : public ParticleTransfer {
       radius_[k] = row[9];
       mass_[k] = row[10];
       id_[k] = static_cast<std::int64_t>(row[11]);
+      if (heat_) {
+        temperature_[k] = row[12];
+        material_[k] = static_cast<int>(row[13]);
+      }
     }
     ParticleView view;
     view.n = m;
@@ -126,6 +155,10 @@ class Proxy final : public ParticleTransfer {
     view.radius = radius_.data();
     view.mass = mass_.data();
     view.id = id_.data();
+    if (heat_) {
+      view.temperature = temperature_.data();
+      view.material = material_.data();
+    }
     book(timers, tr, MPI_Wtime() - t0);
     return view;
   }
@@ -134,22 +167,29 @@ class Proxy final : public ParticleTransfer {
     return {force_[0].data(), force_[1].data(), force_[2].data()};
   }
 
+  double* heatTarget() override { return heat_ ? heatRate_.data() : nullptr; }
+
   void handBack(Timers& timers) override {
-    // The forces travel back to the DEM ranks through the same plan, reversed.
+    // The forces (and heat rates) travel back to the DEM ranks through the same plan, reversed.
     ScopedPhase t(timers, dec_.comm().size() > 1 ? Phase::ExchangeRemote : Phase::ExchangeLocal);
     const double t0 = MPI_Wtime();
     auto& p = dem_.particles();
-    const std::size_t m = plan_.importCount(), n = plan_.exportCount();
-    grow(in_, 3 * m);
-    for (std::size_t k = 0; k < m; ++k)
-      for (int d = 0; d < 3; ++d) in_[3 * k + static_cast<std::size_t>(d)] = force_[d][k];
-    grow(rows_, 3 * n);
-    const PlanTraffic tr = plan_.reverseInExportOrder(std::span<const double>(in_.data(), 3 * m), 3,
-                                                      std::span<double>(rows_.data(), 3 * n));
+    const std::size_t m = plan_.importCount(), n = plan_.exportCount(), w = back_;
+    grow(in_, w * m);
+    for (std::size_t k = 0; k < m; ++k) {
+      for (int d = 0; d < 3; ++d) in_[w * k + static_cast<std::size_t>(d)] = force_[d][k];
+      if (heat_) in_[w * k + 3] = heatRate_[k];
+    }
+    grow(rows_, w * n);
+    const PlanTraffic tr = plan_.reverseInExportOrder(
+        std::span<const double>(in_.data(), w * m), back_, std::span<double>(rows_.data(), w * n));
     const std::span<const int> order = plan_.exportIndex();
-    for (std::size_t k = 0; k < n; ++k)
-      for (int d = 0; d < 3; ++d)
-        p.fExt[d][static_cast<std::size_t>(order[k])] = rows_[3 * k + static_cast<std::size_t>(d)];
+    double* qExt = heat_ ? p.field("heat_ext").data() : nullptr;
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto i = static_cast<std::size_t>(order[k]);
+      for (int d = 0; d < 3; ++d) p.fExt[d][i] = rows_[w * k + static_cast<std::size_t>(d)];
+      if (heat_) qExt[i] = rows_[w * k + 3];
+    }
     book(timers, tr, MPI_Wtime() - t0);
   }
 
@@ -169,23 +209,27 @@ class Proxy final : public ParticleTransfer {
 
   const Decomposition& dec_;
   dem::DemSolver& dem_;
+  bool heat_ = false;
+  int row_ = kProxyRowDoubles, back_ = kForceRowDoubles;
   CommPlan plan_;
   bool built_ = false;
   std::vector<int> dest_;
   std::vector<double> rows_, in_;
   std::array<std::vector<double>, 3> x_, v_, nonDrag_, force_;
-  std::vector<double> radius_, mass_;
+  std::vector<double> radius_, mass_, temperature_, heatRate_;
   std::vector<std::int64_t> id_;
+  std::vector<int> material_;
 };
 
 }  // namespace
 
-std::unique_ptr<ParticleTransfer> colocatedTransfer(dem::DemSolver& dem) {
-  return std::make_unique<Colocated>(dem);
+std::unique_ptr<ParticleTransfer> colocatedTransfer(dem::DemSolver& dem, bool heat) {
+  return std::make_unique<Colocated>(dem, heat);
 }
 
-std::unique_ptr<ParticleTransfer> proxyTransfer(const Decomposition& fluid, dem::DemSolver& dem) {
-  return std::make_unique<Proxy>(fluid, dem);
+std::unique_ptr<ParticleTransfer> proxyTransfer(const Decomposition& fluid, dem::DemSolver& dem,
+                                                bool heat) {
+  return std::make_unique<Proxy>(fluid, dem, heat);
 }
 
 }  // namespace coloc::coupling

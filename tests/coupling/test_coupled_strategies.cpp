@@ -6,7 +6,10 @@
 // case (a settling bed in a closed box, and a suspension periodic along x whose particles cross
 // the periodic face): every particle's position and velocity equal to 1e-10 relative after the run;
 // particle count conserved; the independent mode books its coupling traffic as inter-physics
-// remote.
+// remote. The heated bed adds heat (fluid energy, particle temperature, conduction through
+// contacts and the hot walls, Gunn convection): temperatures equal to 1e-12 relative, the heat the
+// particles receive equal to the heat the fluid loses to round-off in every step.
+#include <algorithm>
 #include <map>
 
 #include "coupled_util.hpp"
@@ -31,8 +34,28 @@ const char* kCase = R"({
   "coupling": { "drag": "difelice" }
 })";
 
+// The bed heated: hot floor (fluid) and walls (particles), warm particles in cooler water.
+const char* kHeatedCase = R"({
+  "domain": { "length": [0.06, 0.04, 0.08], "cells": [6, 5, 8] },
+  "gravity": [0.0, 0.0, -9.81],
+  "run": { "steps": 40 },
+  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-3,
+             "heat": true, "conductivity": 0.6, "heat_capacity": 4186.0,
+             "initial_temperature": 300.0,
+             "boundary": { "zhi": { "type": "outlet", "pressure": 0.0 },
+                           "zlo": { "type": "wall", "temperature": 360.0 } },
+             "pressure": { "tol": 1e-13 } },
+  "particles": { "dt": 5e-5, "heat": true, "wall_temperature": 340.0,
+    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3,
+                     "heat_capacity": 800.0, "conductivity": 1.0 } ],
+    "sources": [ { "type": "random", "lo": [0.002, 0.002, 0.002], "hi": [0.058, 0.038, 0.03],
+                   "count": 150, "radius": 0.0012, "velocity_spread": 0.02,
+                   "temperature": 320.0 } ] },
+  "coupling": { "drag": "difelice", "heat_transfer": "gunn" }
+})";
+
 struct Snapshot {
-  std::vector<double> x, v;
+  std::vector<double> x, v, T;
   long long count = 0;
 };
 
@@ -46,9 +69,17 @@ Snapshot snapshot(coupling::Simulation& sim, int n) {
       s.x[3 * static_cast<std::size_t>(p.id[i]) + static_cast<std::size_t>(d)] = p.x[d][i];
       s.v[3 * static_cast<std::size_t>(p.id[i]) + static_cast<std::size_t>(d)] = p.v[d][i];
     }
+  const bool heat = std::any_of(p.extra.begin(), p.extra.end(),
+                                [](const auto& e) { return e.name == "temperature"; });
+  if (heat) {
+    s.T.assign(static_cast<std::size_t>(n), 0.0);
+    const auto& T = p.field("temperature");
+    for (std::size_t i = 0; i < p.nOwned; ++i) s.T[static_cast<std::size_t>(p.id[i])] = T[i];
+  }
   const auto& comm = sim.decomposition().comm();
   comm.sumInPlace(std::span<double>(s.x));
   comm.sumInPlace(std::span<double>(s.v));
+  comm.sumInPlace(std::span<double>(s.T));
   s.count = sim.particles()->globalCount();
   return s;
 }
@@ -104,8 +135,28 @@ TEST_P(Strategy, SameTrajectoriesAsSerial) {
       ASSERT_NEAR(a.v[k], b.v[k], 1e-10 * vmax) << "particle " << k / 3;
     }
     EXPECT_LE(par.momentumBalance(), 1e-12);
+    ASSERT_EQ(a.T.size(), b.T.size());
+    if (!b.T.empty()) {
+      // The temperatures moved (convection and conduction), the same as in the serial run.
+      double spread = 0;
+      for (std::size_t k = 0; k < b.T.size(); ++k) {
+        spread = std::max(spread, std::abs(b.T[k] - 320.0));
+        ASSERT_NEAR(a.T[k], b.T[k], 1e-12 * b.T[k]) << "particle " << k;
+      }
+      EXPECT_GT(spread, 1e-3);
+      EXPECT_LE(par.heatBalance(), 1e-12);
+      const auto& Ta = par.fluid()->fields().T;
+      const auto& Tb = ser.fluid()->fields().T;
+      const Int3 lo = par.decomposition().lo();
+      forEach(Ta.interior(), [&](int i, int j, int k) {
+        ASSERT_NEAR(Ta(i, j, k), Tb(lo[0] + i, lo[1] + j, lo[2] + k), 1e-12 * Tb(0, 0, 0));
+      });
+    }
     const Json r = par.report(1.0);
     EXPECT_EQ(r["partition"]["strategy"].get<std::string>(), P.strategy);
+    if (!b.T.empty()) {
+      EXPECT_LE(r["checks"]["heat_exchange_balance"].get<double>(), 1e-12);
+    }
     if (P.strategy == "independent") {
       EXPECT_TRUE(par.independent());
       if (world.size() > 1) {
@@ -141,6 +192,7 @@ std::vector<Param> params() {
   for (const char* st : {"uniform", "balanced", "independent", "tiled"}) {
     out.push_back({"bed", kCase, "40", st});
     out.push_back({"periodic", test::kPeriodicSuspensionCase, "6", st});
+    out.push_back({"heated", kHeatedCase, "20", st});
   }
   return out;
 }

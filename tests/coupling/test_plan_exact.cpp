@@ -37,6 +37,29 @@ const char* kChannel = R"({
 // Periodic along x, coupled: DEM ghosts cross the periodic face with a shift.
 const char* const kPeriodic = test::kPeriodicSuspensionCase;
 
+// The layered bed heated (fluid energy, particle temperature, Gunn convection): the temperature
+// column of the DEM's ghost update, the fluid's T halo, the two deposited heat fields and the
+// proxy rows' heat columns.
+const char* kHeatedBed = R"({
+  "domain": { "length": [0.16, 0.04, 0.16], "cells": [16, 4, 16] },
+  "gravity": [0.0, 0.0, -9.81],
+  "run": { "mode": "coupled", "steps": 1 },
+  "fluid": { "nu": 1.5e-5, "rho": 1.2, "dt": 5e-4,
+             "heat": true, "conductivity": 0.026, "heat_capacity": 1006.0,
+             "initial_temperature": 300.0,
+             "boundary": { "zlo": { "type": "inlet", "velocity": [0.0, 0.0, 0.3], "superficial": true,
+                                    "temperature": 400.0 },
+                           "zhi": { "type": "outlet", "pressure": 0.0 } } },
+  "particles": {
+    "dt": 5e-5, "heat": true,
+    "materials": [ { "density": 2500.0, "young": 1e6, "poisson": 0.3,
+                     "heat_capacity": 840.0, "conductivity": 1.0 } ],
+    "sources": [ { "type": "layered", "lo": [0.0, 0.0, 0.0], "hi": [0.16, 0.04, 0.05],
+                   "count": 1500, "radius": 0.002 } ]
+  },
+  "coupling": { "heat_transfer": "gunn" }
+})";
+
 struct Param {
   const char* name;
   const char* text;
@@ -92,12 +115,13 @@ TEST_P(PlanExact, FirstStepLedgerEqualsPlanPerRankAndKind) {
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, PlanExact,
-    ::testing::Values(Param{"bed", kBed, "uniform"}, Param{"bed", kBed, "balanced"},
-                      Param{"bed", kBed, "independent"}, Param{"channel", kChannel, "uniform"},
-                      Param{"channel", kChannel, "balanced"},
-                      Param{"channel", kChannel, "independent"},
-                      Param{"periodic", kPeriodic, "uniform"},
-                      Param{"periodic", kPeriodic, "balanced"},
-                      Param{"periodic", kPeriodic, "independent"}, Param{"bed", kBed, "tiled"},
-                      Param{"channel", kChannel, "tiled"}, Param{"periodic", kPeriodic, "tiled"}),
+    ::testing::Values(
+        Param{"bed", kBed, "uniform"}, Param{"bed", kBed, "balanced"},
+        Param{"bed", kBed, "independent"}, Param{"channel", kChannel, "uniform"},
+        Param{"channel", kChannel, "balanced"}, Param{"channel", kChannel, "independent"},
+        Param{"periodic", kPeriodic, "uniform"}, Param{"periodic", kPeriodic, "balanced"},
+        Param{"periodic", kPeriodic, "independent"}, Param{"bed", kBed, "tiled"},
+        Param{"channel", kChannel, "tiled"}, Param{"periodic", kPeriodic, "tiled"},
+        Param{"heated", kHeatedBed, "uniform"}, Param{"heated", kHeatedBed, "independent"},
+        Param{"heated", kHeatedBed, "tiled"}),
     [](const auto& info) { return std::string(info.param.name) + "_" + info.param.strategy; });

@@ -9,7 +9,9 @@
 //   an in-memory re-balance onto other blocks and back  == to round-off
 // The cases: a dense granular gas with random velocities in a box periodic along x and y
 // (DEM only: many crossings and contacts each step), and a small fluidised bed (coupled: the
-// fluid's history terms and the drag forces held over the sub-steps are part of the state).
+// fluid's history terms and the drag forces held over the sub-steps are part of the state), also
+// heated (fluid and particle temperatures, the heat rates held over the sub-steps, Gunn
+// convection, conduction through contacts and the walls).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -63,6 +65,29 @@ const char* kBed = R"({
   "coupling": { "drag": "difelice", "kernel": "trilinear", "dem_substeps": 10 }
 })";
 
+// The bed heated: a hot inflow into a cooler bed, hot walls for the particles.
+const char* kHeatedBed = R"({
+  "name": "ck-heated-bed",
+  "domain": { "length": [0.012, 0.01, 0.03], "cells": [6, 5, 15], "periodic": {"x": true} },
+  "gravity": [0.0, 0.0, -9.81],
+  "run": { "steps": 10 },
+  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 5e-4, "initial_velocity": [0, 0, 0.05],
+             "heat": true, "conductivity": 0.6, "heat_capacity": 4186.0,
+             "initial_temperature": 300.0,
+             "boundary": { "zlo": { "type": "inlet", "velocity": [0, 0, 0.05],
+                                    "superficial": true, "temperature": 350.0 },
+                           "zhi": { "type": "outlet", "pressure": 0.0 } },
+             "pressure": { "tol": 1e-12 } },
+  "particles": { "dt": 5e-5, "skin": 0.5, "heat": true, "wall_temperature": 330.0,
+    "materials": [ { "density": 2500.0, "young": 1e5, "poisson": 0.3, "restitution": 0.8,
+                     "friction": 0.4, "heat_capacity": 800.0, "conductivity": 1.0 } ],
+    "sources": [ { "type": "random", "lo": [0.0, 0.0, 0.001], "hi": [0.012, 0.01, 0.014],
+                   "count": 400, "radius": 0.0005, "velocity_spread": 0.1,
+                   "temperature": 310.0 } ] },
+  "coupling": { "drag": "difelice", "kernel": "trilinear", "dem_substeps": 10,
+                "heat_transfer": "gunn" }
+})";
+
 Config config(const char* text, std::vector<std::string> overrides = {}) {
   return Config::fromText(text, "test", std::move(overrides), coupling::caseSchema());
 }
@@ -78,20 +103,27 @@ std::string scratchDir() {
 }
 
 /// Everything the next step reads, by particle id and global cell (sums over the ranks): x, v,
-/// omega, f, torque, f_ext of every particle; p, eps and the cell-centred u of every cell.
+/// omega, f, torque, f_ext of every particle (with heat also its temperature and held heat
+/// rate); p, eps and the cell-centred u of every cell (with heat also T).
 std::vector<double> state(coupling::Simulation& sim, long long nParticles) {
-  constexpr int kRow = 18;
+  const auto& p = sim.particles()->particles();
+  const bool heat = std::any_of(p.extra.begin(), p.extra.end(),
+                                [](const auto& e) { return e.name == "temperature"; });
+  const int kRow = heat ? 20 : 18, kCell = heat ? 6 : 5;
   const auto& dec = sim.decomposition();
   const auto& g = dec.grid();
   const bool fluid = sim.fluid() != nullptr;
   const long long cells = fluid ? g.cellCount() : 0;
-  std::vector<double> out(static_cast<std::size_t>(kRow * nParticles + 5 * cells), 0.0);
-  const auto& p = sim.particles()->particles();
+  std::vector<double> out(static_cast<std::size_t>(kRow * nParticles + kCell * cells), 0.0);
   for (std::size_t i = 0; i < p.nOwned; ++i) {
     double* o = &out[static_cast<std::size_t>(kRow * p.id[i])];
     for (const auto* a : {&p.x, &p.v, &p.omega, &p.f, &p.torque, &p.fExt}) {
       for (int d = 0; d < 3; ++d) o[d] = (*a)[d][i];
       o += 3;
+    }
+    if (heat) {
+      o[0] = p.field("temperature")[i];
+      o[1] = p.field("heat_ext")[i];
     }
   }
   if (fluid) {
@@ -102,10 +134,11 @@ std::vector<double> state(coupling::Simulation& sim, long long nParticles) {
     forEach(f.p.interior(), [&](int i, int j, int k) {
       const long long c =
           dec.lo()[0] + i + g.cells[0] * (dec.lo()[1] + j + g.cells[1] * (dec.lo()[2] + k));
-      double* o = &out[static_cast<std::size_t>(kRow * nParticles + 5 * c)];
+      double* o = &out[static_cast<std::size_t>(kRow * nParticles + kCell * c)];
       o[0] = f.p(i, j, k);
       o[1] = f.eps(i, j, k);
       for (int d = 0; d < 3; ++d) o[2 + d] = u[static_cast<std::size_t>(d)](i, j, k);
+      if (heat) o[5] = f.T(i, j, k);
     });
   }
   dec.comm().sumInPlace(std::span<double>(out));
@@ -262,6 +295,9 @@ TEST(CheckpointInvariance, FluidisedBedTiled) {
 }
 TEST(CheckpointInvariance, FluidisedBedIndependent) {
   checkInvariance(kBed, "independent", "uniform");
+}
+TEST(CheckpointInvariance, HeatedBedTiled) {
+  checkInvariance(kHeatedBed, "tiled", "independent");
 }
 
 }  // namespace

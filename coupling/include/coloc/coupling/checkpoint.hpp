@@ -41,6 +41,9 @@ struct RunCounters {
   long long steps = 0, substeps = 0;
   double momentumResidual = 0, solidVolume = 0, accelL1 = 0;
   std::array<double, 3> particleImpulse{}, fluidImpulse{};
+  /// Convection: the worst mismatch over the run between the heat the particles received and
+  /// the heat the fluid lost in a step, relative to the gross exchanged heat sum |q| dt.
+  double heatResidual = 0;
 };
 /// The counters as attributes of `group` (created), and back (one table, checkpoint.cpp).
 void writeRunCounters(H5File& file, const std::string& group, const RunCounters& c);

@@ -17,6 +17,7 @@
 //   refreshCellVelocity()        cell-centred u^{n+1} (and grad p^{n+1})    (fluid)
 //   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (coupling)
 //   applyCouplingForces()        F = beta (u - v) - V_p rho_f grad p         (coupling)
+//   applyCouplingHeat()          q = H' (T_f - T_p) with convection          (coupling)
 //   handForcesToParticles()      forces -> the DEM's external force array    (inter-physics, local:
 //                                co-located, the force kernel stores into that array directly)
 //   advanceParticles()           n_sub DEM sub-steps                         (particles)
@@ -133,6 +134,12 @@ class Simulation {
   double momentumBalance() const { return run_.momentumResidual; }
   /// L1 norm of the cell-centred fluid acceleration over the last step, sum |du/dt| V (m^4/s^2).
   double fluidAccelerationL1() const { return run_.accelL1; }
+  /// Convection: the worst heat mismatch of a step over the run (RunCounters::heatResidual).
+  double heatBalance() const { return run_.heatResidual; }
+  /// Convection: the largest particle Biot number h d / (6 k_p) seen in this process's steps
+  /// (lumped capacitance wants it well below kBiotLimit).
+  double biotMax() const { return biotMax_; }
+  static constexpr double kBiotLimit = 0.1;
   /// Total solid volume deposited on the cells (global, m^3) after the last deposit.
   double depositedSolidVolume() const { return run_.solidVolume; }
 
@@ -179,8 +186,9 @@ class Simulation {
   void waitForSlowestRank();
   void gatherParticles();
   void computeStencils();
-  /// The 7 fields the drag samples (eps, u, grad p; smoothed copies with coupling.smoothing).
-  using DragFields = std::array<const CellField*, 7>;
+  /// The fields the drag samples (eps, u, grad p, and T with convection; smoothed copies with
+  /// coupling.smoothing).
+  using DragFields = std::array<const CellField*, 8>;
   DragFields fluidForDrag();
   /// The fields sampled at the particles, the drag law and the particles' response
   /// (ParticleCoupling; none sampled at set-up: fields null).
@@ -188,11 +196,16 @@ class Simulation {
   void depositParticles();
   void sumDepositsAcrossBlocks();
   void updateFluidCoefficients();
+  /// Convection: the fluid's heat source is explicit, so it must not move a cell's temperature
+  /// past its particles' in one step: dt sum H' / (rho_f c_f eps V) <= 1 in every cell
+  /// (coloc::Error on every rank otherwise).
+  void checkHeatSourceNumber(double dt);
   void advanceFluid(double dt);
   /// What the coupling hands the fluid for a step: eps^{n+1}, K, K u_p (owned cells).
   fv::CouplingInputs fluidInputs() const;
   void sampleFluidForForces();
   void applyCouplingForces(double dt);
+  void applyCouplingHeat(double dt);
   void handForcesToParticles();
   void smoothField(CellField& f);
   const CellField& sampled(const CellField& f, CellField& smoothed);
@@ -220,6 +233,12 @@ class Simulation {
   CellField solid_, scratch_, eps_, K_;
   std::array<CellField, 3> KUp_;
   std::array<CellField, 3> uSmooth_, gradPSmooth_;
+  // Convection: the heat the particles give each cell (W) and sum H' (W/K), deposited with the
+  // drag's terms and summed across blocks with them; the smoothed copy of T.
+  bool convects_ = false;
+  CellField heatSource_, heatCoefficient_, TSmooth_;
+  double heatSourceNumber_ = 0;  // the largest dt sum H' / (rho_f c_f eps V) of the run
+  double biotMax_ = 0;
   int smoothingPasses_ = 0;
   std::array<CellField, 3> uCell_, uCellOld_, gradP_;
   HaloPlan halo_;

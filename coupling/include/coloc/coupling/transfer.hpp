@@ -7,7 +7,9 @@
 //   proxy        (independent) the DEM has its own blocks: every particle's coupling data
 //                (x, v, non-drag force, radius, mass, id: 12 values) travels through a
 //                CommPlan (partition/comm_plan.hpp) to the rank whose fluid block holds its
-//                centre, and the force comes back through the same plan, reversed. The plan is
+//                centre, and the force comes back through the same plan, reversed. With
+//                convection (coupling.heat_transfer) the row also carries the temperature and
+//                the material, and the heat rate comes back with the force. The plan is
 //                rebuilt each step (the particles move) and reused for the way back. Booked as
 //                inter-physics exchange: rows to other ranks `proxy` (remote), rows a rank keeps
 //                `force_handover` (local).
@@ -23,11 +25,14 @@
 
 namespace coloc::coupling {
 
-/// What the coupling kernels see of the particles (n of them).
 /// Doubles a particle's row carries through the proxy transfer (independent strategy): to the
-/// fluid's rank x, v, the non-drag force (3 each), radius, mass, id; back, the force (3).
+/// fluid's rank x, v, the non-drag force (3 each), radius, mass, id; back, the force (3). With
+/// convection, kProxyHeatDoubles more to the fluid's rank (temperature, material) and
+/// kHeatRowDoubles more back (the heat rate).
 inline constexpr int kProxyRowDoubles = 12, kForceRowDoubles = 3;
+inline constexpr int kProxyHeatDoubles = 2, kHeatRowDoubles = 1;
 
+/// What the coupling kernels see of the particles (n of them).
 struct ParticleView {
   std::size_t n = 0;
   /// The non-drag force on particle i is force[d][i] - held[d][i]: the DEM's last total force
@@ -38,6 +43,9 @@ struct ParticleView {
   const double* radius = nullptr;
   const double* mass = nullptr;
   const std::int64_t* id = nullptr;
+  /// With convection (else null): temperature (K) and material index of each particle.
+  const double* temperature = nullptr;
+  const int* material = nullptr;
 };
 
 class ParticleTransfer {
@@ -47,13 +55,17 @@ class ParticleTransfer {
   virtual ParticleView gather(Timers& timers) = 0;
   /// Where the coupling force of view particle i goes (3 arrays of at least view.n entries).
   virtual std::array<double*, 3> forceTarget() = 0;
-  /// The forces written to forceTarget() to the DEM's external-force array. Collective (proxy).
+  /// With convection, where the heat rate of view particle i goes (else null).
+  virtual double* heatTarget() = 0;
+  /// The forces written to forceTarget() to the DEM's external-force array, and the heat rates
+  /// written to heatTarget() to its heat_ext field. Collective (proxy).
   virtual void handBack(Timers& timers) = 0;
 };
 
-/// The view on `dem`'s own arrays.
-std::unique_ptr<ParticleTransfer> colocatedTransfer(dem::DemSolver& dem);
+/// The view on `dem`'s own arrays; `heat`: with convection (the DEM has particles.heat).
+std::unique_ptr<ParticleTransfer> colocatedTransfer(dem::DemSolver& dem, bool heat);
 /// Proxies on the fluid blocks `fluid` of the particles of `dem` (on its own blocks).
-std::unique_ptr<ParticleTransfer> proxyTransfer(const Decomposition& fluid, dem::DemSolver& dem);
+std::unique_ptr<ParticleTransfer> proxyTransfer(const Decomposition& fluid, dem::DemSolver& dem,
+                                                bool heat);
 
 }  // namespace coloc::coupling
