@@ -183,50 +183,94 @@ CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const
 // ---- the run's counters ---------------------------------------------------------------------
 
 namespace {
-/// The attribute name of each counter, in one order: fn(name, member).
+/// One counter as an attribute: a double, an integer, a flag (an integer 0 or 1) or a 3-vector.
+template <class T>
+void writeCounter(H5File& file, const std::string& group, const char* name, const T& v) {
+  if constexpr (std::is_same_v<T, std::array<double, 3>>)
+    file.setAttribute(group, name, std::span<const double>(v));
+  else if constexpr (std::is_same_v<T, bool>)
+    file.setAttribute(group, name, static_cast<long long>(v ? 1 : 0));
+  else
+    file.setAttribute(group, name, v);
+}
+template <class T>
+void readCounter(H5File& file, const std::string& group, const char* name, T& v) {
+  if constexpr (std::is_same_v<T, std::array<double, 3>>) {
+    const auto a = file.attributeDoubles(group, name);
+    for (std::size_t d = 0; d < 3 && d < a.size(); ++d) v[d] = a[d];
+  } else if constexpr (std::is_same_v<T, bool>) {
+    v = file.attributeInt(group, name) != 0;
+  } else if constexpr (std::is_same_v<T, long long>) {
+    v = file.attributeInt(group, name);
+  } else {
+    v = file.attributeDouble(group, name);
+  }
+}
+
+/// Which counters a checkpoint holds: every one; one that older files lack (read as the default
+/// when absent); one of fluid.heat (written and read only with it).
+enum class Held { Always, Since, Heat };
+
+/// The attribute name of each counter, in one order: fn(name, member, held).
 template <class C, class Fn>
 void forEachRunCounter(C& c, Fn&& fn) {
-  fn("time", c.time);
-  fn("last_dt", c.lastDt);
-  fn("last_step_dt", c.lastStepDt);
-  fn("steps", c.steps);
-  fn("dem_substeps", c.substeps);
-  fn("momentum_residual", c.momentumResidual);
-  fn("solid_volume", c.solidVolume);
-  fn("fluid_accel_l1", c.accelL1);
-  fn("particle_drag_impulse", c.particleImpulse);
-  fn("fluid_drag_impulse", c.fluidImpulse);
-  fn("heat_exchange_residual", c.heatResidual);
+  fn("time", c.time, Held::Always);
+  fn("last_dt", c.lastDt, Held::Always);
+  fn("last_step_dt", c.lastStepDt, Held::Always);
+  fn("steps", c.steps, Held::Always);
+  fn("dem_substeps", c.substeps, Held::Always);
+  fn("momentum_residual", c.momentumResidual, Held::Always);
+  fn("solid_volume", c.solidVolume, Held::Always);
+  fn("fluid_accel_l1", c.accelL1, Held::Always);
+  fn("particle_drag_impulse", c.particleImpulse, Held::Always);
+  fn("fluid_drag_impulse", c.fluidImpulse, Held::Always);
+  fn("heat_exchange_residual", c.heatResidual, Held::Since);
+}
+
+/// The fluid's counters (fv::FluidCounters), one attribute each, in one order:
+/// fn(name, member, held).
+template <class C, class Fn>
+void forEachFluidCounter(C& c, Fn&& fn) {
+  fn("time", c.time, Held::Always);
+  fn("dt_old", c.dtOld, Held::Always);
+  fn("dt_last", c.dtLast, Held::Always);
+  fn("cfl_last", c.cflLast, Held::Always);
+  fn("max_rate", c.maxRate, Held::Always);
+  fn("steady_residual", c.steadyResidual, Held::Always);
+  fn("residual_last", c.resLast, Held::Always);
+  fn("rhs_scale_last", c.rhsScaleLast, Held::Always);
+  fn("steps", c.steps, Held::Always);
+  fn("iterations_sum", c.itSum, Held::Always);
+  fn("solves", c.solves, Held::Always);
+  fn("setups", c.setups, Held::Always);
+  fn("iterations_max", c.itMax, Held::Always);
+  fn("iterations_last", c.itLast, Held::Always);
+  fn("unconverged_solves", c.unconverged, Held::Since);
+  fn("have_old", c.haveOld, Held::Always);
+  fn("rates_stale", c.ratesStale, Held::Always);
+  // fluid.heat: the energy accounting
+  fn("heat_enthalpy_initial", c.heatEnthalpy0, Held::Heat);
+  fn("heat_source", c.heatSource, Held::Heat);
+  static constexpr const char* kFace[6] = {"heat_face_0", "heat_face_1", "heat_face_2",
+                                           "heat_face_3", "heat_face_4", "heat_face_5"};
+  for (std::size_t b = 0; b < 6; ++b) fn(kFace[b], c.heatFace[b], Held::Heat);
+  fn("heat_started", c.heatStarted, Held::Heat);
 }
 }  // namespace
 
 void writeRunCounters(H5File& file, const std::string& group, const RunCounters& c) {
   file.createGroup(group);
-  forEachRunCounter(c, [&](const char* name, const auto& v) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::array<double, 3>>)
-      file.setAttribute(group, name, std::span<const double>(v));
-    else
-      file.setAttribute(group, name, v);
-  });
+  forEachRunCounter(
+      c, [&](const char* name, const auto& v, Held) { writeCounter(file, group, name, v); });
 }
 
 RunCounters readRunCounters(H5File& file, const std::string& group) {
   RunCounters c;
-  forEachRunCounter(c, [&](const char* name, auto& v) {
-    using T = std::decay_t<decltype(v)>;
-    if constexpr (std::is_same_v<T, std::array<double, 3>>) {
-      const auto a = file.attributeDoubles(group, name);
-      for (std::size_t d = 0; d < 3 && d < a.size(); ++d) v[d] = a[d];
-    } else if constexpr (std::is_same_v<T, long long>) {
-      v = file.attributeInt(group, name);
-    } else if (std::string_view(name) == "heat_exchange_residual") {
-      try {  // absent from checkpoints written before convection
-        v = file.attributeDouble(group, name);
-      } catch (const Error&) {
-        v = 0;
-      }
-    } else {
-      v = file.attributeDouble(group, name);
+  forEachRunCounter(c, [&](const char* name, auto& v, Held held) {
+    if (held != Held::Since) return readCounter(file, group, name, v);
+    try {  // absent from checkpoints written before it was counted: the default
+      readCounter(file, group, name, v);
+    } catch (const Error&) {
     }
   });
   return c;
@@ -248,32 +292,9 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
                             writeCellVector(file, path, dec, *a[0], *a[1], *a[2]);
                         });
   const fv::FluidCounters c = fluid.counters();
-  const std::pair<const char*, double> dbl[] = {{"time", c.time},
-                                                {"dt_old", c.dtOld},
-                                                {"dt_last", c.dtLast},
-                                                {"cfl_last", c.cflLast},
-                                                {"max_rate", c.maxRate},
-                                                {"steady_residual", c.steadyResidual},
-                                                {"residual_last", c.resLast},
-                                                {"rhs_scale_last", c.rhsScaleLast}};
-  for (const auto& [k, v] : dbl) file.setAttribute(group, k, v);
-  const std::pair<const char*, long long> ints[] = {{"steps", c.steps},
-                                                    {"iterations_sum", c.itSum},
-                                                    {"solves", c.solves},
-                                                    {"setups", c.setups},
-                                                    {"iterations_max", c.itMax},
-                                                    {"iterations_last", c.itLast},
-                                                    {"unconverged_solves", c.unconverged},
-                                                    {"have_old", c.haveOld ? 1 : 0},
-                                                    {"rates_stale", c.ratesStale ? 1 : 0}};
-  for (const auto& [k, v] : ints) file.setAttribute(group, k, v);
-  if (!fluid.fields().T.data().empty()) {  // fluid.heat: the energy accounting
-    file.setAttribute(group, "heat_enthalpy_initial", c.heatEnthalpy0);
-    file.setAttribute(group, "heat_source", c.heatSource);
-    for (std::size_t b = 0; b < 6; ++b)
-      file.setAttribute(group, "heat_face_" + std::to_string(b), c.heatFace[b]);
-    file.setAttribute(group, "heat_started", static_cast<long long>(c.heatStarted ? 1 : 0));
-  }
+  forEachFluidCounter(c, [&](const char* name, const auto& v, Held held) {
+    if (held != Held::Heat || fluid.hasHeat()) writeCounter(file, group, name, v);
+  });
 }
 
 void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
@@ -299,38 +320,71 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
       });
   file.comm().raiseIfAny(err.empty() ? err : "checkpoint '" + file.path() + "': " + err);
   fv::FluidCounters c;
-  c.time = file.attributeDouble(group, "time");
-  c.dtOld = file.attributeDouble(group, "dt_old");
-  c.dtLast = file.attributeDouble(group, "dt_last");
-  c.cflLast = file.attributeDouble(group, "cfl_last");
-  c.maxRate = file.attributeDouble(group, "max_rate");
-  c.steadyResidual = file.attributeDouble(group, "steady_residual");
-  c.resLast = file.attributeDouble(group, "residual_last");
-  c.rhsScaleLast = file.attributeDouble(group, "rhs_scale_last");
-  c.steps = file.attributeInt(group, "steps");
-  c.itSum = file.attributeInt(group, "iterations_sum");
-  c.solves = file.attributeInt(group, "solves");
-  c.setups = file.attributeInt(group, "setups");
-  c.itMax = file.attributeInt(group, "iterations_max");
-  c.itLast = file.attributeInt(group, "iterations_last");
-  try {  // absent from checkpoints written before it was counted
-    c.unconverged = file.attributeInt(group, "unconverged_solves");
-  } catch (const Error&) {
-    c.unconverged = 0;
-  }
-  c.haveOld = file.attributeInt(group, "have_old") != 0;
-  c.ratesStale = file.attributeInt(group, "rates_stale") != 0;
-  if (!fluid.fields().T.data().empty()) {  // fluid.heat (the table above read T)
-    c.heatEnthalpy0 = file.attributeDouble(group, "heat_enthalpy_initial");
-    c.heatSource = file.attributeDouble(group, "heat_source");
-    for (std::size_t b = 0; b < 6; ++b)
-      c.heatFace[b] = file.attributeDouble(group, "heat_face_" + std::to_string(b));
-    c.heatStarted = file.attributeInt(group, "heat_started") != 0;
-  }
+  forEachFluidCounter(c, [&](const char* name, auto& v, Held held) {
+    if (held == Held::Heat && !fluid.hasHeat()) return;  // (the table above read T with it)
+    if (held != Held::Since) return readCounter(file, group, name, v);
+    try {  // absent from checkpoints written before it was counted: the default
+      readCounter(file, group, name, v);
+    } catch (const Error&) {
+    }
+  });
   fluid.restoreState(c);
 }
 
 // ---- particles ----------------------------------------------------------------------------------
+
+namespace {
+/// The energy accounts (particles.heat; dem::DemHeat), when every rank's state has them: the
+/// attribute "heat" holds the run's values (enthalpy_initial, wall_heat_in, ext_heat_in,
+/// inflow_enthalpy_in, outflow_enthalpy_out: the report's), the dataset "heat_shares" one row
+/// per writing rank, its shares (wall_heat_in, ext_heat_in, outflow_enthalpy_out).
+void writeDemHeat(H5File& file, const std::string& group, const dem::DemHeat& h) {
+  const Comm& comm = file.comm();
+  if (comm.min(h.known ? 1LL : 0LL) == 0) return;
+  double sum[3] = {h.wallIn, h.extIn, h.outflowOut};
+  comm.sumInPlace(std::span<double>(sum, 3));
+  const std::vector<double> run = {h.enthalpyInitial, sum[0], sum[1], h.inflowIn, sum[2]};
+  file.setAttribute(group, "heat", std::span<const double>(run));
+  writeParticleVec3(file, group + "/heat_shares",
+                    {std::span<const double>(&h.wallIn, 1), std::span<const double>(&h.extIn, 1),
+                     std::span<const double>(&h.outflowOut, 1)});
+}
+
+/// The accounts of writeDemHeat: the shares' rows split evenly over the reading ranks (on the
+/// writer's rank count, each rank its own row), each rank the sum of its rows; without the
+/// shares, rank 0 holds the run's values. A file without them: none (not known).
+dem::DemHeat readDemHeat(H5File& file, const std::string& group) {
+  dem::DemHeat h;
+  std::vector<double> run;
+  try {  // absent from files written without particles.heat or before the accounts
+    run = file.attributeDoubles(group, "heat");
+  } catch (const Error&) {
+    return h;
+  }
+  if (run.size() != 5)
+    throw Error(fmt::format("checkpoint '{}': {}: attribute heat must have 5 entries, not {}",
+                            file.path(), group, run.size()));
+  h.known = true;
+  h.enthalpyInitial = run[0];
+  h.inflowIn = run[3];
+  const std::string shares = group + "/heat_shares";
+  if (!file.exists(shares)) {
+    if (file.comm().isRoot()) {
+      h.wallIn = run[1];
+      h.extIn = run[2];
+      h.outflowOut = run[4];
+    }
+    return h;
+  }
+  const auto rows = readParticleVec3(file, shares, evenRows(file.comm(), file.shape(shares)[0]));
+  for (std::size_t k = 0; k < rows[0].size(); ++k) {
+    h.wallIn += rows[0][k];
+    h.extIn += rows[1][k];
+    h.outflowOut += rows[2][k];
+  }
+  return h;
+}
+}  // namespace
 
 void writeDemState(H5File& file, const std::string& group, const dem::DemState& s) {
   const auto& p = s.particles;
@@ -371,6 +425,7 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
     const std::vector<double> flow = s.flow.pack();  // particle inflow/outflow tallies
     file.setAttribute(group, "flow", std::span<const double>(flow));
   }
+  writeDemHeat(file, group, s.heat);
   const std::string cg = group + "/contacts";
   file.createGroup(cg);
   const std::size_t m = s.contacts.size();
@@ -427,6 +482,7 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
   s.steps = file.attributeInt(group, "steps");
   s.rebuilds = file.attributeInt(group, "rebuilds");
   s.flow = dem::DemFlow::unpack(file.attributeDoubles(group, "flow"));
+  s.heat = readDemHeat(file, group);
   const std::string cg = group + "/contacts";
   const RowRange rc = evenRows(comm, file.attributeInt(cg, "count"));
   const auto holder = readParticleArray<std::int64_t>(file, cg + "/holder", rc);
@@ -480,6 +536,15 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
       if (i < x0.size() && !std::isfinite(x0[i]))
         bad("x_rebuild", i, "has a rebuild position that is not finite");
     }
+  }
+  {
+    const auto& h = s.heat;
+    for (const double v : {h.enthalpyInitial, h.inflowIn, h.wallIn, h.extIn, h.outflowOut})
+      if (err.empty() && !std::isfinite(v))
+        err = fmt::format(
+            "{}: the energy accounts (heat, heat_shares) hold a value that is not "
+            "finite",
+            group);
   }
   // Ids unique over all ranks, and every contact history held by (and pointing at) an existing
   // particle: every rank gathers the sorted ids (8 bytes a particle, once at a restart).

@@ -46,7 +46,7 @@ void ParticleCoupling::resize(std::size_t n) {
   for (int d = 0; d < 3; ++d)
     for (auto* a : {&uAt_, &vDep_, &gradPAt_, &ownPressure_}) (*a)[d].resize(cap);
   if (convects())
-    for (auto* v : {&TAt_, &hEff_, &heatRate_}) v->resize(cap);
+    for (auto* v : {&TAt_, &hEff_}) v->resize(cap);
 }
 
 void ParticleCoupling::locate(const ParticleView& view, const FieldLayout& layout) {
@@ -78,23 +78,20 @@ void ParticleCoupling::evaluateDrag(const DragFields* fields, double dt, double 
   const bool self = selfVelocity_ != SelfVelocity::None;
   failure_.clear();
   biotMax_ = 0;
-  const std::size_t nFields = convects() ? 8 : 7;
   // Range by range (kSampleChunk particles): the fields sampled at them, then the drag, which
   // reads the sampled values while they are still in cache. Each phase is timed as its own.
   for (std::size_t s0 = 0; s0 < n; s0 += kSampleChunk) {
     const std::size_t sn = std::min(kSampleChunk, n - s0);
     if (fields) {
-      // The 7 (8) fields at these particles in one pass over their stencils (kernel.hpp), just
+      // The 7 fields at these particles in one pass over their stencils (kernel.hpp), just
       // before the drag reads them (still in cache).
       ScopedPhase ts(*timers_, Phase::CouplingInterpolate);
-      double* out[8] = {epsAt_.data() + s0};
+      double* out[7] = {epsAt_.data() + s0};
       for (int d = 0; d < 3; ++d) {
         out[1 + d] = uAt_[d].data() + s0;
         out[4 + d] = gradPAt_[d].data() + s0;
       }
-      if (convects()) out[7] = TAt_.data() + s0;
-      interpolate(stencils_, std::span<const CellField* const>(fields->data(), nFields),
-                  std::span<double* const>(out, nFields), s0, sn);
+      interpolate(stencils_, *fields, out, s0, sn);
     }
     evaluateDragOn(s0, sn, dt, time);
     if (convects()) exchangeHeatOn(s0, sn, dt, fields != nullptr);
@@ -165,8 +162,6 @@ void ParticleCoupling::exchangeHeatOn(std::size_t first, std::size_t count, doub
   if (!sampled) {
     std::fill(hEff_.begin() + static_cast<std::ptrdiff_t>(first),
               hEff_.begin() + static_cast<std::ptrdiff_t>(last), 0.0);
-    std::fill(heatRate_.begin() + static_cast<std::ptrdiff_t>(first),
-              heatRate_.begin() + static_cast<std::ptrdiff_t>(last), 0.0);
     return;
   }
   double biot = biotMax_;
@@ -181,7 +176,6 @@ void ParticleCoupling::exchangeHeatOn(std::size_t first, std::size_t count, doub
     const double H = nu * kF_ * kPi * d;
     const double capacity = p.mass[i] * cpOfMaterial_[mat];
     hEff_[i] = dt > 0 ? H / (1.0 + dt * H / capacity) : H;
-    heatRate_[i] = hEff_[i] * (TAt_[i] - p.temperature[i]);
     biot = std::max(biot, nu * kF_ / (6.0 * kOfMaterial_[mat]));
   }
   biotMax_ = biot;
@@ -273,22 +267,27 @@ void ParticleCoupling::deposit(CellField& solid, CellField& K, const std::array<
   const double s = 1.0 / (rhoF_ * vCell);
   // The 5 deposits (7 with convection) in one pass over the stencils (kernel.hpp); beta v~ is
   // formed, not stored.
-  const DepositTerm terms[7] = {
-      {volume_.data(), nullptr, 1.0 / vCell, &solid}, {beta_.data(), nullptr, s, &K},
-      {beta_.data(), vDep_[0].data(), s, KUp[0]},     {beta_.data(), vDep_[1].data(), s, KUp[1]},
-      {beta_.data(), vDep_[2].data(), s, KUp[2]},     {heatRate_.data(), nullptr, -1.0, heatSource},
-      {hEff_.data(), nullptr, 1.0, heatCoefficient}};
+  const DepositTerm terms[7] = {{volume_.data(), nullptr, 1.0 / vCell, &solid},
+                                {beta_.data(), nullptr, s, &K},
+                                {beta_.data(), vDep_[0].data(), s, KUp[0]},
+                                {beta_.data(), vDep_[1].data(), s, KUp[1]},
+                                {beta_.data(), vDep_[2].data(), s, KUp[2]},
+                                {hEff_.data(), view_.temperature, 1.0, heatSource},
+                                {hEff_.data(), nullptr, 1.0, heatCoefficient}};
   const bool heat = convects() && heatSource && heatCoefficient;
   coupling::deposit(stencils_, std::span<const DepositTerm>(terms, heat ? 7 : 5));
 }
 
 void ParticleCoupling::sampleForForces(const ForceFields& fields) {
-  double* out[6];
+  double* out[7];
   for (int d = 0; d < 3; ++d) {
     out[d] = uAt_[d].data();
     out[3 + d] = gradPAt_[d].data();
   }
-  interpolate(stencils_, fields, out);
+  out[6] = convects() ? TAt_.data() : nullptr;
+  const std::size_t n = convects() ? 7 : 6;
+  interpolate(stencils_, std::span<const CellField* const>(fields.data(), n),
+              std::span<double* const>(out, n));
 }
 
 void ParticleCoupling::applyForces(const std::array<double*, 3>& out, double dt,
@@ -309,10 +308,12 @@ void ParticleCoupling::applyForces(const std::array<double*, 3>& out, double dt,
 
 void ParticleCoupling::applyHeat(double* out, double dt, double sums[2]) const {
   const std::size_t n = stencils_.count();
+  const double* Tp = view_.temperature;
   for (std::size_t i = 0; i < n; ++i) {
-    out[i] = heatRate_[i];
-    sums[0] += heatRate_[i] * dt;
-    sums[1] += std::abs(heatRate_[i]) * dt;
+    const double q = hEff_[i] * (TAt_[i] - Tp[i]);
+    out[i] = q;
+    sums[0] += q * dt;
+    sums[1] += hEff_[i] * (std::abs(TAt_[i]) + std::abs(Tp[i])) * dt;
   }
 }
 

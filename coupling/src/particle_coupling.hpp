@@ -8,20 +8,23 @@
 // halo work stay with the Simulation, which calls these in the order of the step:
 //
 //   locate()          stencils and volumes of the particles of the view
-//   evaluateDrag()    range by range: the 7 drag fields sampled (8 with convection: T), beta from
-//                     the law, the response; with convection each particle's heat rate q
+//   evaluateDrag()    range by range: the 7 drag fields sampled, beta from the law, the response;
+//                     with convection each particle's exchange coefficient H'
 //   deposit()         V_p, beta', beta' v~ -> solid, K, K u_p (one pass over the stencils), and
-//                     with convection -q -> the fluid's heat source, H' -> its coefficient
-//   sampleForForces() u^{n+1}, grad p^{n+1} at the particles (one pass)
+//                     with convection H' T_p -> the fluid's heat source, H' -> its coefficient
+//   sampleForForces() u^{n+1}, grad p^{n+1} (and with convection the step's mean fluid
+//                     temperature) at the particles (one pass)
 //   applyForces()     F = beta' (u - v~) - V_p rho_f grad p (+ the self-velocity share)
 //   applyHeat()       q of each particle to the DEM's heat_ext (convection)
 //
-// Convection (coupling.heat_transfer, heat_transfer.hpp): q = H' (T_f - T_p) with H = Nu k_f pi d
-// and H' = H / (1 + dt H / (m c_p)), the particle's backward-Euler response over the step (as
-// beta' for the drag): a particle whose thermal time is shorter than the step relaxes to the
-// fluid's temperature without overshoot. T_f, T_p: at the start of the step. The fluid cells
-// receive -q through the same stencil, so the heat the particles gain over the step is the heat
-// the fluid loses, to round-off.
+// Convection (coupling.heat_transfer, heat_transfer.hpp), semi-implicit as the drag:
+// H = Nu k_f pi d and H' = H / (1 + dt H / (m c_p)), the particle's backward-Euler response over
+// the step (as beta' for the drag: a particle whose thermal time is shorter than the step relaxes
+// to the fluid's temperature without overshoot). The fluid takes sum H' T_p and sum H' per cell
+// and treats the exchange implicitly in its own temperature (fv::CouplingInputs); each particle
+// then receives q = H' (Tmean(x_p) - T_p), Tmean the mean fluid temperature of the step's heat
+// sub-steps sampled with the same stencil: by the adjointness of deposit and interpolation the
+// heat the particles gain is the heat the fluid loses, to round-off.
 // The response (simulation.hpp's header comment): beta' = beta / (1 + dt beta / m) and
 // v~ = v + dt (f_nondrag - V_p rho_f grad p) / m, written once (responseDenominator(),
 // velocityWithoutDrag()) and used both by the array-at-a-time common case and by the
@@ -47,10 +50,10 @@ namespace coloc::coupling {
 
 class ParticleCoupling {
  public:
-  /// The fields the drag samples: eps, u (3), grad p (3), and with convection T (the 8th).
-  using DragFields = std::array<const CellField*, 8>;
-  /// The 6 fields the forces sample: u (3), grad p (3).
-  using ForceFields = std::array<const CellField*, 6>;
+  /// The 7 fields the drag samples: eps, u (3), grad p (3).
+  using DragFields = std::array<const CellField*, 7>;
+  /// The fields the forces sample: u (3), grad p (3), and with convection Tmean (the 7th).
+  using ForceFields = std::array<const CellField*, 7>;
 
   ParticleCoupling() = default;
   /// The coupling.* keys of `cfg`; `frozen`: the particles cannot move (run.mode dummy_dem).
@@ -78,16 +81,17 @@ class ParticleCoupling {
   void evaluateDrag(const DragFields* fields, double dt, double time);
   /// solid += V_p / V_cell, K += beta' / (rho_f V_cell), K u_p += beta' v~ / (rho_f V_cell) in
   /// one pass over the stencils (the fields as they are: the caller zeroes them); with
-  /// convection in the same pass heatSource += -q (W) and heatCoefficient += H' (W/K).
+  /// convection in the same pass heatSource += H' T_p (W) and heatCoefficient += H' (W/K).
   void deposit(CellField& solid, CellField& K, const std::array<CellField*, 3>& KUp,
                CellField* heatSource = nullptr, CellField* heatCoefficient = nullptr) const;
-  /// u^{n+1}, grad p^{n+1} at the particles.
+  /// u^{n+1}, grad p^{n+1} (and Tmean with convection) at the particles.
   void sampleForForces(const ForceFields& fields);
   /// The coupling force of each particle into out[d][i]; adds to sums[d] the particles' drag
   /// impulse over dt and to sums[6 + d] the gross exchanged momentum sum beta' (|u| + |v~|) dt.
   void applyForces(const std::array<double*, 3>& out, double dt, double sums[9]) const;
-  /// Convection: the heat rate q of each particle into out[i] (W); adds to sums[0] the heat the
-  /// particles receive over dt and to sums[1] the gross sum |q| dt.
+  /// Convection: the heat rate q = H' (Tmean - T_p) of each particle into out[i] (W); adds to
+  /// sums[0] the heat the particles receive over dt and to sums[1] the gross sum H' (|Tmean| +
+  /// |T_p|) dt (the scale of the round-off of the two sides' sums).
   void applyHeat(double* out, double dt, double sums[2]) const;
 
  private:
@@ -102,8 +106,8 @@ class ParticleCoupling {
     return v + dt * (nonDrag - volume * rhoF_ * gradP) / m;
   }
   void resize(std::size_t n);
-  /// Convection on particles first .. first + count - 1: H' and q from the sampled fields
-  /// (`sampled` false, at set-up: none, q = 0).
+  /// Convection on particles first .. first + count - 1: H' from the sampled fields (`sampled`
+  /// false, at set-up: none, H' = 0).
   void exchangeHeatOn(std::size_t first, std::size_t count, double dt, bool sampled);
   /// The drag on particles first .. first + count - 1.
   void evaluateDragOn(std::size_t first, std::size_t count, double dt, double time);
@@ -140,7 +144,7 @@ class ParticleCoupling {
   ParticleView view_;
   Stencils stencils_;
   std::vector<double> volume_, beta_, epsAt_;
-  std::vector<double> TAt_, hEff_, heatRate_;  // convection: T_f at the particle, H', q
+  std::vector<double> TAt_, hEff_;  // convection: Tmean at the particle, H'
   std::array<std::vector<double>, 3> uAt_, vDep_, gradPAt_;
   /// coupling.self_velocity: V k_d per particle, its own pressure-gradient force per unit drag
   /// (SelfResponse::pressure), from evaluateDrag to applyForces of the same step.

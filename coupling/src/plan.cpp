@@ -25,8 +25,9 @@ const long long kGhostUpdate =
 /// The widths that depend on the case's physics: heat adds the particle temperature to the DEM's
 /// ghost update (its one kOpGhostUpdate extra field, dem/src/heat.cpp), one gather of the fluid's
 /// T per heat sub-step (the plan counts one: the report's fluid_heat.substeps_last says how many
-/// a step took), and convection the temperature and material to the proxy rows, the heat rate to
-/// the rows back and two deposited fields (the heat source and its coefficient).
+/// a step took), and convection one gather of the step's mean T, the temperature and material to
+/// the proxy rows, the heat rate to the rows back and two deposited fields (the heat source and
+/// its coefficient).
 struct Widths {
   long long ghostUpdate = kGhostUpdate, proxyRow = kProxyRowDoubles, forceRow = kForceRowDoubles;
   int deposited = 5, temperatureHalos = 0;
@@ -39,6 +40,7 @@ Widths widthsOf(const Config& cfg, bool coupled) {
     w.proxyRow += kProxyHeatDoubles;
     w.forceRow += kHeatRowDoubles;
     w.deposited = 7;
+    w.temperatureHalos += 1;
   }
   return w;
 }

@@ -291,7 +291,8 @@ Json DemSolver::diagnostics() const {
   j["mass_balance"] = scale > 0 ? std::abs(scale - f.massOut - held) / scale : 0.0;
   if (m.heat.on) {
     // energy accounts (J): enthalpy held = enthalpy at the start + wall_heat_in + ext_heat_in +
-    // inflow_enthalpy_in - outflow_enthalpy_out (the coupling's energy balance reads them)
+    // inflow_enthalpy_in - outflow_enthalpy_out (the coupling's energy balance reads them);
+    // energy_balance: the residual relative to the largest of |H|, |H0| and the gross flows
     const auto& h = m.heat;
     const auto& T = m.p.extra[h.iT].data[0];
     double loc[4] = {0, h.wallHeat, h.extHeat, h.outflowEnthalpy};
@@ -308,6 +309,13 @@ Json DemSolver::diagnostics() const {
     hj["ext_heat_in"] = loc[2];
     hj["inflow_enthalpy_in"] = h.inflowEnthalpy;
     hj["outflow_enthalpy_out"] = loc[3];
+    const double H0 = h.enthalpyInitial;
+    hj["enthalpy_initial"] = H0;
+    const double res = std::abs(loc[0] - (H0 + loc[1] + loc[2] + h.inflowEnthalpy - loc[3]));
+    const double scale = std::max(
+        {std::abs(loc[0]), std::abs(H0),
+         std::abs(loc[1]) + std::abs(loc[2]) + std::abs(h.inflowEnthalpy) + std::abs(loc[3])});
+    hj["energy_balance"] = scale > 0 ? res / scale : 0.0;
     hj["temperature_min"] = m.comm.min(tMin);
     hj["temperature_max"] = m.comm.max(tMax);
     hj["wall_temperature"] = h.wallT;

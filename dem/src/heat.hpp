@@ -37,8 +37,12 @@ class HeatTransfer {
   std::size_t iT = 0, iQ = 0, iExt = 0;  // indices in ParticleStore::extra
 
   // Energy accounts (J). Local to this rank (summed by the report): wallHeat, extHeat,
-  // outflowEnthalpy. Global (the same on every rank, like DemFlow's in tallies): inflowEnthalpy.
+  // outflowEnthalpy. Global (the same on every rank, like DemFlow's in tallies): inflowEnthalpy
+  // and enthalpyInitial, the particles' enthalpy when the run started (set-up, or the state a
+  // restart continues). The report's balance: enthalpy = enthalpyInitial + wallHeat + extHeat +
+  // inflowEnthalpy - outflowEnthalpy, summed over the ranks.
   double wallHeat = 0, extHeat = 0, outflowEnthalpy = 0, inflowEnthalpy = 0;
+  double enthalpyInitial = 0;
 
   /// Reads the keys and the materials' heat properties; registers the fields when on.
   void setup(const Config& cfg, const std::vector<Material>& mats, ParticleStore& p);
@@ -50,6 +54,28 @@ class HeatTransfer {
   /// Enthalpy m c_p T of owned particle i (J).
   double enthalpy(const ParticleStore& p, std::size_t i) const {
     return p.mass[i] * cp[static_cast<std::size_t>(p.material[i])] * p.extra[iT].data[0][i];
+  }
+  /// Enthalpy of the owned particles (J).
+  double localEnthalpy(const ParticleStore& p) const {
+    double h = 0;
+    for (std::size_t i = 0; i < p.nOwned; ++i) h += enthalpy(p, i);
+    return h;
+  }
+  /// The accounts as a state holds them (this rank's shares; DemHeat), and back.
+  DemHeat accounts() const {
+    return {.known = true,
+            .enthalpyInitial = enthalpyInitial,
+            .inflowIn = inflowEnthalpy,
+            .wallIn = wallHeat,
+            .extIn = extHeat,
+            .outflowOut = outflowEnthalpy};
+  }
+  void setAccounts(const DemHeat& a) {
+    enthalpyInitial = a.enthalpyInitial;
+    inflowEnthalpy = a.inflowIn;
+    wallHeat = a.wallIn;
+    extHeat = a.extIn;
+    outflowEnthalpy = a.outflowOut;
   }
   /// The explicit-Euler stability check: dt <= kStableFraction m c_p / H_max for the smallest
   /// particle of each material (rMin; infinity: none) in contact with its own material and the

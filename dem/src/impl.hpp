@@ -180,6 +180,8 @@ struct DemSolver::Impl {
   // state.cpp
   int ownerRank(const double* x) const;
   void restore(DemState& st);
+  /// The energy accounts of a restored state (particles.heat; DemHeat says how).
+  void restoreHeat(const DemHeat& a);
   DemState save();
   DemFlow globalFlow() const;  // collective: the out tallies summed over the ranks
 };

@@ -98,6 +98,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     flow.countInitial = static_cast<long long>(buf[0]);
     flow.massInitial = buf[1];
   }
+  if (heat.on) heat.enthalpyInitial = comm.sum(heat.localEnthalpy(p));  // a reduction of its own
   rebuild(true);
   {
     ScopedPhase f(timers, Phase::DemForce);

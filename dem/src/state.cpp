@@ -167,6 +167,7 @@ void DemSolver::Impl::restore(DemState& st) {
       flow.countOutByFace = {};
     }
   }
+  const DemHeat accounts = st.heat;  // (st is emptied below)
   // 1. particles to their owners (by position), a general all-to-all: any rank may hold any
   //    subset of the state
   //    as rows of the state fields; the solver takes the state's extra fields (the same on
@@ -330,6 +331,26 @@ void DemSolver::Impl::restore(DemState& st) {
                   keep.begin() + static_cast<std::ptrdiff_t>(o + n), (*a)[k].begin());
   }
   checkOverlap(comm.max(forces.tally().maxOverlap));
+  if (heat.on) restoreHeat(accounts);
+}
+
+void DemSolver::Impl::restoreHeat(const DemHeat& a) {
+  // the global accounts from the lowest rank whose state has them; each rank keeps the shares of
+  // its own state (zero without), so the sums over the ranks are the saved ones. No state has
+  // them (a file from before them): zeros, and the run's initial enthalpy is the restored one.
+  const int P = comm.size();
+  const int from = static_cast<int>(comm.min(a.known ? static_cast<long long>(comm.rank()) : P));
+  if (from == P) {
+    heat.setAccounts(DemHeat{});
+    heat.enthalpyInitial = comm.sum(heat.localEnthalpy(p));
+    return;
+  }
+  DemHeat mine = a.known ? a : DemHeat{};
+  double g[2] = {a.enthalpyInitial, a.inflowIn};
+  comm.broadcast(std::span<double>(g, 2), from);
+  mine.enthalpyInitial = g[0];
+  mine.inflowIn = g[1];
+  heat.setAccounts(mine);
 }
 
 DemState DemSolver::Impl::save() {
@@ -341,6 +362,7 @@ DemState DemSolver::Impl::save() {
   st.steps = steps;
   st.rebuilds = rebuilds;
   st.flow = globalFlow();
+  if (heat.on) st.heat = heat.accounts();
   const std::size_t n = p.nOwned;
   st.particles = ownedRows(p);
   for (int d = 0; d < 3; ++d) {

@@ -88,6 +88,9 @@ FluidSolver::~FluidSolver() = default;
 const FluidFields& FluidSolver::fields() const {
   return impl_->f;
 }
+bool FluidSolver::hasHeat() const {
+  return impl_->prm.heat.on;
+}
 FluidFields& FluidSolver::edit() {
   auto& m = *impl_;
   m.uGhostsFresh = false;
@@ -107,6 +110,16 @@ void FluidSolver::Impl::takeInputs(const CouplingInputs& in) {
   });
   if (in.heatSource && prm.heat.on)
     forEach(owned, [&](int i, int j, int k) { f.heatSource(i, j, k) = (*in.heatSource)(i, j, k); });
+  heatImplicit = in.heatCoefficient && prm.heat.on;
+  if (heatImplicit) {
+    if (f.heatCoefficient.data().empty()) {  // the first step with convection
+      f.heatCoefficient = CellField(f.T.layout(), 0.0);
+      f.Tmean = CellField(f.T.layout(), 0.0);
+    }
+    forEach(owned, [&](int i, int j, int k) {
+      f.heatCoefficient(i, j, k) = (*in.heatCoefficient)(i, j, k);
+    });
+  }
   uGhostsFresh = false;  // a superficial inlet's face velocity is U / eps
   epsGhostsFresh = false;
   ratesStale = true;

@@ -78,6 +78,7 @@ struct FluidSolver::Impl {
   std::vector<double> heatWork;
   bool tGhostsFresh = true, heatStarted = false;
   double heatEnthalpy0 = 0, heatSourceTotal = 0;
+  bool heatImplicit = false;  // this step's inputs gave a heat coefficient (CouplingInputs)
   std::array<double, 6> heatFace{0, 0, 0, 0, 0, 0};
   long long heatSubstepsLast = 0;
 

@@ -143,6 +143,13 @@ void FluidSolver::Impl::heatStep(double dt) {
   const long long N = std::max(1LL, static_cast<long long>(want));
   const double dts = dt / static_cast<double>(N);
   const bool hasSource = !f.heatSource.data().empty();
+  // Convection: the particles' exchange point-implicit in T (CouplingInputs::heatCoefficient):
+  // the cell receives S - K T^m at sub-step m; Tmean collects the mean of T^m for the particles.
+  const bool implicit = heatImplicit;
+  double* Tbar = implicit ? f.Tmean.data().data() : nullptr;
+  const double* Kh = implicit ? f.heatCoefficient.data().data() : nullptr;
+  if (implicit) f.Tmean.fill(0.0);
+  const double share = 1.0 / static_cast<double>(N);
   double stepBnd[6] = {0, 0, 0, 0, 0, 0};
   double stepSource = 0;
   const auto epsAt = [&](std::ptrdiff_t c, long long m) {
@@ -168,18 +175,40 @@ void FluidSolver::Impl::heatStep(double dt) {
         }
     r = 0;
     double* Tw = f.T.data().data();
-    for (int k = 0; k < n[2]; ++k)
-      for (int j = 0; j < n[1]; ++j)
-        for (int i = 0; i < n[0]; ++i, ++r) {
-          const std::ptrdiff_t c = f.T.index(i, j, k);
-          Tw[c] = (epsAt(c, m - 1) * Tw[c] + dts / vol * heatWork[r]) / epsAt(c, m);
-        }
+    if (implicit) {
+      for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+          for (int i = 0; i < n[0]; ++i, ++r) {
+            const std::ptrdiff_t c = f.T.index(i, j, k);
+            Tw[c] = (epsAt(c, m - 1) * Tw[c] + dts / vol * heatWork[r]) /
+                    (epsAt(c, m) + dts / vol * Kh[c] / rc);
+            src -= Kh[c] * Tw[c];
+            Tbar[c] += share * Tw[c];
+          }
+    } else {
+      for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+          for (int i = 0; i < n[0]; ++i, ++r) {
+            const std::ptrdiff_t c = f.T.index(i, j, k);
+            Tw[c] = (epsAt(c, m - 1) * Tw[c] + dts / vol * heatWork[r]) / epsAt(c, m);
+          }
+    }
     for (int b = 0; b < 6; ++b) stepBnd[b] += rc * dts * bnd[b];
     stepSource += dts * src;
     phase.reset();
     {
       ScopedPhase th(timers, Phase::FluidHalo);
       cellHalo.gather(f.T, &timers, Exchange::IntraPhysics);
+    }
+    phase.emplace(timers, Phase::FluidMomentum);
+  }
+  if (implicit) {
+    // The mean's ghosts across block faces and periodic faces (the coupling samples it; at the
+    // box faces it mirrors the owned layer itself, the adjoint of its deposit's fold).
+    phase.reset();
+    {
+      ScopedPhase th(timers, Phase::FluidHalo);
+      cellHalo.gather(f.Tmean, &timers, Exchange::IntraPhysics);
     }
     phase.emplace(timers, Phase::FluidMomentum);
   }

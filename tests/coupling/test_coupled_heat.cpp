@@ -9,6 +9,13 @@
 // particle's backward-Euler response over each CFD step (dt / tau_T = 1/160: 0.3 % of the
 // exponent). The heat the particle gives equals the heat the fluid cells receive to round-off.
 // Its material is soft (E = 1 kPa) only to keep the DEM time-step check out of the way.
+//
+// Stiff exchange: warm spheres at rest in still air in a closed, adiabatic box, with CFD steps 10
+// times the air's thermal relaxation time to the particles (dt sum H / (rho_f c_f eps V) ~ 10:
+// an explicit source would overshoot by an order of magnitude). The exchange is implicit on both
+// sides, so every temperature stays between the two initial ones, the total enthalpy of fluid
+// and particles is constant to 1e-12, and both relax to the two-body equilibrium
+// (C_f T_f0 + C_p T_p0) / (C_f + C_p).
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -104,6 +111,7 @@ TEST(Convection, SingleSphereCoolsAtRanzMarshallRate) {
   // The water stays at its temperature to within 1e-6 of the difference.
   const Json r = sim.report(1.0);
   EXPECT_LT(r["checks"]["heat_exchange_balance"].get<double>(), 1e-12);
+  EXPECT_LT(r["checks"]["energy_balance"].get<double>(), 1e-12);
   EXPECT_LT(r["coupling"]["heat_transfer"]["biot_max"].get<double>(), 0.1);
   const auto& T = sim.fluid()->fields().T;
   double tMax = 0;
@@ -111,6 +119,84 @@ TEST(Convection, SingleSphereCoolsAtRanzMarshallRate) {
   tMax = sim.decomposition().comm().max(tMax);
   EXPECT_GT(tMax, Tf);
   EXPECT_LT(tMax - Tf, 1e-6 * (Tp0 - Tf));
+}
+
+TEST(Convection, StiffExchangeStaysBoundedAndConservesEnergy) {
+  const double Tf0 = 300.0, Tp0 = 400.0, rhoF = 1.2, cF = 1006.0, rhoP = 2500.0, cP = 840.0;
+  const double r = 2.5e-4;
+  const int n = 64;
+  // 2 mm cells, one 0.5 mm sphere a cell on average: the air of a cell relaxes to its particles in
+  // C_cell / sum H ~ 0.1 s, the particles in m c_p / H ~ 1.7 s, conduction between cells in
+  // h^2 / alpha ~ 0.2 s; the CFD step is 1 s.
+  const char* text = R"({
+    "domain": { "length": [0.008, 0.008, 0.008], "cells": [4, 4, 4] },
+    "gravity": [0.0, 0.0, 0.0],
+    "run": { "steps": 30 },
+    "fluid": { "nu": 1.5e-5, "rho": 1.2,
+               "heat": true, "conductivity": 0.026, "heat_capacity": 1006.0,
+               "initial_temperature": 300.0, "pressure": { "tol": 1e-12 } },
+    "particles": { "dt": 2e-3, "heat": true,
+      "materials": [ { "density": 2500.0, "young": 10.0, "poisson": 0.3,
+                       "heat_capacity": 840.0, "conductivity": 1.0 } ],
+      "sources": [ { "type": "random", "lo": [0.0005, 0.0005, 0.0005],
+                     "hi": [0.0075, 0.0075, 0.0075], "count": 64, "radius": 0.00025,
+                     "temperature": 400.0 } ] },
+    "coupling": { "drag": "stokes", "heat_transfer": "ranz_marshall", "dem_substeps": 500 }
+  })";
+  // The premise: one sphere's H (Nu = 2 in still air) over one step exceeds its cell's air
+  // capacity several times (an explicit source would overshoot).
+  const double stiffness = 1.0 * 2.0 * 0.026 * kPi * 2 * r / (rhoF * cF * 0.002 * 0.002 * 0.002);
+  ASSERT_GT(stiffness, 5.0);
+  const Config cfg = test::caseFromText(text);
+  coupling::Simulation sim(Comm::world(), cfg);
+  const auto& comm = sim.decomposition().comm();
+  const double vCell = sim.decomposition().grid().cellVolume();
+  const double mP = rhoP * 4.0 / 3.0 * kPi * r * r * r;
+  // Enthalpies and extremes (collective): fluid sum rho c eps V T, particles sum m c T.
+  const auto measure = [&](double out[4]) {
+    const auto& f = sim.fluid()->fields();
+    double hf = 0, hp = 0, lo = 1e300, hi = -1e300;
+    forEach(f.T.interior(), [&](int i, int j, int k) {
+      hf += rhoF * cF * f.eps(i, j, k) * vCell * f.T(i, j, k);
+      lo = std::min(lo, f.T(i, j, k));
+      hi = std::max(hi, f.T(i, j, k));
+    });
+    const auto& p = sim.particles()->particles();
+    const auto& T = p.field("temperature");
+    for (std::size_t i = 0; i < p.nOwned; ++i) {
+      hp += mP * cP * T[i];
+      lo = std::min(lo, T[i]);
+      hi = std::max(hi, T[i]);
+    }
+    out[0] = comm.sum(hf);
+    out[1] = comm.sum(hp);
+    out[2] = comm.min(lo);
+    out[3] = comm.max(hi);
+  };
+  double start[4];
+  measure(start);
+  // The fluid's heat capacity (eps < 1 where the particles are) and the particles'.
+  const double cf = start[0] / Tf0, cp = start[1] / Tp0;
+  const double teq = (cf * Tf0 + cp * Tp0) / (cf + cp);
+  ASSERT_EQ(sim.particles()->globalCount(), n);
+  double now[4];
+  while (!sim.finished()) {
+    sim.step();
+    measure(now);
+    ASSERT_GE(now[2], Tf0 - 1e-9) << "step " << sim.steps();
+    ASSERT_LE(now[3], Tp0 + 1e-9) << "step " << sim.steps();
+    ASSERT_NEAR(now[0] + now[1], start[0] + start[1], 1e-12 * (start[0] + start[1]))
+        << "step " << sim.steps();
+  }
+  std::printf(
+      "stiff exchange: C_f = %.4g J/K, C_p = %.4g J/K, T_eq = %.6f K; after %lld steps "
+      "T in [%.6f, %.6f] K\n",
+      cf, cp, teq, sim.steps(), now[2], now[3]);
+  EXPECT_LE(sim.heatBalance(), 1e-12);
+  const Json report = sim.report(1.0);
+  EXPECT_LE(report["checks"]["energy_balance"].get<double>(), 1e-12);
+  EXPECT_NEAR(now[2], teq, 1e-3 * (Tp0 - Tf0));
+  EXPECT_NEAR(now[3], teq, 1e-3 * (Tp0 - Tf0));
 }
 
 TEST(Convection, NusseltLaws) {

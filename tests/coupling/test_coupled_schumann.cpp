@@ -6,18 +6,18 @@
 // Schumann's solution (tests/coupling/schumann.hpp) with h = Nu k_f / d, Gunn's Nu evaluated here
 // from the bed's measured eps and Re = d u_s / nu, Pr = rho_f nu c_f / k_f: within 5 % of
 // T_in - T0 over the whole history (to t = 2 times the front's passage, theta ~ 0.97), on 1 and
-// 2 ranks (measured 0.86 %); and 2 ranks = the serial run to 1e-10 of T_in - T0 (5e-14).
+// 2 ranks (measured 0.78 %); and 2 ranks = the serial run to 1e-10 of T_in - T0 (5e-14).
 //
 // The error budget. The outlet sits at y = 5.35 transfer units (0.054 a cell, 100 cells). What
 // dominates is the first-order upwind advection of the fluid temperature: its numerical
 // diffusion U h (1 - CFL)/2 (CFL 0.25 here) widens the front, whose own width in y is
 // ~ sqrt(2 y), by a few per cent, and it smears the fluid front's jump exp(-y) = 0.5 % at
-// t = eps x / u_s over a few cells: the largest error, 0.86 %, sits there (t = 0.40 s), with
-// 0.7-0.8 % along the main front. The time splitting of the exchange (q held over the CFD step,
-// the particle's backward-Euler H', dt H / (m c_p) = 0.0066) is minor: halving the step changes
-// the largest error by 0.02 % (to 0.88 %: the smaller sub-step CFL adds diffusion). A 1-D model
-// of the same discretisation gives 0.84 % (0.89 % as dt -> 0). Finite particle count plays no
-// part here: the lattice puts one sphere at every cell centre, so eps and the exchange are
+// t = eps x / u_s over a few cells: the largest error, 0.78 %, sits there (t = 0.40 s), with
+// about 0.7 % along the main front. The exchange's time discretisation (semi-implicit on both
+// sides, dt H / (m c_p) = 0.0066) is minor: halving the step changes the largest error by 0.06 %
+// (to 0.84 %: the smaller sub-step CFL adds diffusion). A 1-D model of the upwind scheme gives
+// 0.89 % as dt -> 0, where the exchange's treatment no longer matters. Finite particle count plays
+// no part here: the lattice puts one sphere at every cell centre, so eps and the exchange are
 // uniform.
 #include <algorithm>
 #include <cmath>

@@ -156,6 +156,7 @@ TEST_P(Strategy, SameTrajectoriesAsSerial) {
     EXPECT_EQ(r["partition"]["strategy"].get<std::string>(), P.strategy);
     if (!b.T.empty()) {
       EXPECT_LE(r["checks"]["heat_exchange_balance"].get<double>(), 1e-12);
+      EXPECT_LE(r["checks"]["energy_balance"].get<double>(), 1e-12);
     }
     if (P.strategy == "independent") {
       EXPECT_TRUE(par.independent());

@@ -27,6 +27,29 @@ inline coloc::Config config(const std::string& text) {
   return coloc::Config::fromText(text, "test", {}, schema());
 }
 
+/// A conveying channel of 30 x 16 x 16 mm: an inflow patch on xlo (20,000 particles/s of two
+/// diameters, 1.5 and 2 mm, at 2 m/s with a spread), an outflow face xhi, walls elsewhere;
+/// collisions. `extra`: more keys of "particles" (each after a comma); `material`: more keys of
+/// its material, `inflow`: of its inflow source (the same way).
+inline std::string channel(const std::string& extra = "", const std::string& material = "",
+                           const std::string& inflow = "") {
+  return R"({
+  "domain": {"length": [0.03, 0.016, 0.016], "cells": [6, 4, 4]},
+  "particles": {
+    "dt": 1e-5,
+    "boundary": {"xhi": "outflow"},
+    "materials": [{"density": 2500, "young": 1e7, "poisson": 0.3, "restitution": 0.8,
+                   "friction": 0.3)" +
+         material + R"(}],
+    "inflow": [{"face": "xlo", "patch": {"min": [0.002, 0.002], "max": [0.014, 0.014]},
+                "rate": 20000, "velocity": [2, 0, 0], "velocity_spread": 0.5,
+                "size": {"type": "discrete", "diameters": [0.0015, 0.002],
+                         "weights": [2, 1]})" +
+         inflow + R"(}])" + extra + R"(
+  }
+})";
+}
+
 /// A solver with its decomposition and timers (the decomposition must outlive the solver).
 struct Case {
   coloc::Config cfg;

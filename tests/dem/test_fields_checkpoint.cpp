@@ -3,13 +3,8 @@
 // not the writer's) restores a solver whose particles carry their values; a file without extra
 // fields has none.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdio>
-#include <filesystem>
-
-#include "coloc/coupling/checkpoint.hpp"
-#include "coloc/io/h5io.hpp"
+#include "checkpoint_test_util.hpp"
 #include "dem_test_util.hpp"
 
 namespace {
@@ -51,18 +46,7 @@ TEST(ParticleFields, CheckpointFile) {
     for (int k = 0; k < 3; ++k) p.field("dir", k)[i] = static_cast<double>(k - p.id[i]);
   }
   for (int s = 0; s < 50; ++s) a.dem->substep();
-  const std::string path =
-      (std::filesystem::temp_directory_path() /
-       ("coloc_fields_" + std::to_string(comm.size()) + "_" + std::to_string(::getpid()) + ".h5"))
-          .string();
-  const std::string file = comm.broadcast(path);
-  {
-    coloc::H5File f = coloc::H5File::create(comm, file);
-    coloc::coupling::writeDemState(f, "/particles", a.dem->saveState());
-    f.close();
-  }
-  coloc::H5File f = coloc::H5File::openRead(comm, file);
-  coloc::dem::DemState st = coloc::coupling::readDemState(f, "/particles");
+  coloc::dem::DemState st = demtest::throughFile(comm, "fields", a.dem->saveState());
   ASSERT_EQ(st.particles.extra.size(), 2u);
   EXPECT_EQ(st.particles.extra[1].name, "dir");
   EXPECT_EQ(st.particles.extra[1].components, 3);
@@ -72,9 +56,6 @@ TEST(ParticleFields, CheckpointFile) {
   EXPECT_GT(comm.sum(static_cast<long>(b.particles().nGhost)), 0);
   for (int s = 0; s < 50; ++s) b.substep();
   EXPECT_EQ(comm.sum(wrong(b.particles())), 0);
-  f.close();
-  comm.barrier();
-  if (comm.isRoot()) std::remove(file.c_str());
 }
 
 }  // namespace

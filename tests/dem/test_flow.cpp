@@ -88,22 +88,7 @@ TEST(DemFlow, OutflowFloorMatchesSerial) {
   EXPECT_GT(contacts, 0.05);  // contacts (tens of touching pairs) with histories
 }
 
-std::string channel(const std::string& extra = "") {
-  return R"({
-  "domain": {"length": [0.03, 0.016, 0.016], "cells": [6, 4, 4]},
-  "particles": {
-    "dt": 1e-5,
-    "boundary": {"xhi": "outflow"},
-    "materials": [{"density": 2500, "young": 1e7, "poisson": 0.3, "restitution": 0.8,
-                   "friction": 0.3}],
-    "inflow": [{"face": "xlo", "patch": {"min": [0.002, 0.002], "max": [0.014, 0.014]},
-                "rate": 20000, "velocity": [2, 0, 0], "velocity_spread": 0.5,
-                "size": {"type": "discrete", "diameters": [0.0015, 0.002],
-                         "weights": [2, 1]}}])" +
-         extra + R"(
-  }
-})";
-}
+using demtest::channel;
 
 TEST(DemFlow, ConveyingChannelMatchesSerialAndReachesSteadyCount) {
   const std::string text = channel();

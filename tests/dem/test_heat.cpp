@@ -11,7 +11,8 @@
 //    1e-12 relative (adiabatic walls); with walls at a fixed temperature, its change equals the
 //    accumulated wall heat to 1e-12 relative;
 //  - the temperatures of that bed agree with a serial run to round-off (process grid, tiled);
-//  - save/restore continues them bit for bit; particles.heat off moves no temperature;
+//  - save/restore continues them and the energy accounts bit for bit; particles.heat off moves
+//    no temperature;
 //  - a material without heat_capacity is refused naming the key.
 #include <gtest/gtest.h>
 
@@ -21,6 +22,7 @@
 
 #include "coloc/partition/tiled.hpp"
 #include "dem_test_util.hpp"
+#include "heat_test_util.hpp"
 #include "tiled_layouts.hpp"
 
 namespace {
@@ -38,11 +40,7 @@ double globalSum(Case& c, F&& f) {
 
 /// T by id over all ranks (n ids).
 std::vector<double> temperatures(Case& c, long n) {
-  std::vector<double> t(static_cast<std::size_t>(n), 0.0);
-  const auto& T = c.p().field("temperature");
-  for (std::size_t i = 0; i < c.p().nOwned; ++i) t[static_cast<std::size_t>(c.p().id[i])] = T[i];
-  c.dec.comm().sumInPlace(std::span<double>(t));
-  return t;
+  return demtest::fieldById(c.p(), c.dec.comm(), n);
 }
 
 // r = 1 mm, spacing s = 2r - delta, delta = 10 um, L = 4 s; materials 0 (k 1, c_p 1) and 1
@@ -161,31 +159,12 @@ TEST(DemHeat, SphereOnAWallRelaxesToItsTemperature) {
   EXPECT_LT(std::fabs(E1 - E0 - W) / E1, 1e-12);
 }
 
-/// A box of 12 mm with a lattice of 5 x 5 x 6 spheres (r = 1 mm) slightly overlapping (spacing
-/// 1.98 mm), under gravity: the lower three layers at 400 K, the upper three at 300 K.
-std::string bedCase(double wallT) {
-  char buf[2048];
-  std::snprintf(buf, sizeof buf, R"({
-  "domain": {"length": [0.012, 0.012, 0.012], "cells": [6, 6, 6]},
-  "gravity": [0, 0, -9.81],
-  "particles": {
-    "dt": 1e-5, "heat": true, "wall_temperature": %.17g,
-    "materials": [{"density": 2500, "young": 1e7, "restitution": 0.5,
-                   "heat_capacity": 0.2, "conductivity": 2}],
-    "sources": [{"type": "lattice", "lo": [0.00204, 0.00204, 0.00101], "counts": [5, 5, 3],
-                 "spacing": [0.00198, 0.00198, 0.00198], "radius": 0.001, "temperature": 400},
-                {"type": "lattice", "lo": [0.00204, 0.00204, 0.00695], "counts": [5, 5, 3],
-                 "spacing": [0.00198, 0.00198, 0.00198], "radius": 0.001, "temperature": 300}]
-  }
-})",
-                wallT);
-  return buf;
-}
-constexpr long kBedN = 150;
+using demtest::heatBed;  // the hot bed: 150 spheres, lower half 400 K, upper half 300 K
+constexpr long kBedN = demtest::kHeatBedN;
 
 TEST(DemHeat, ClosedBoxConservesEnthalpy) {
   for (const double wallT : {0.0, 350.0}) {
-    Case c(bedCase(wallT));
+    Case c(heatBed(wallT));
     const double E0 = c.dem->diagnostics()["heat"]["enthalpy"].get<double>();
     for (int s = 0; s < 3000; ++s) c.dem->substep();
     const auto d = c.dem->diagnostics();
@@ -201,6 +180,9 @@ TEST(DemHeat, ClosedBoxConservesEnthalpy) {
           wallT, c.dec.size(), std::fabs(E1 - E0 - W) / E0, W, E0,
           d["contacts_per_particle"].get<double>(), spread);
     EXPECT_LT(std::fabs(E1 - E0 - W) / E0, 1e-12);
+    // the enthalpy at step 0 (the same sum, reduced alone: to the last bits)
+    EXPECT_NEAR(d["heat"]["enthalpy_initial"].get<double>(), E0, 1e-15 * E0);
+    EXPECT_LE(d["heat"]["energy_balance"].get<double>(), 1e-12);
     EXPECT_GT(d["contacts_per_particle"].get<double>(), 0.5);
     EXPECT_LT(spread, 99.0);  // heat moved between the halves
     if (wallT == 0)
@@ -212,7 +194,7 @@ TEST(DemHeat, ClosedBoxConservesEnthalpy) {
 
 /// Largest |T_par - T_ser| / 100 K after `steps` sub-steps.
 double bedAgainstSerial(Case& par, int steps) {
-  Case ser(bedCase(350), kSelf, {1, 1, 1});
+  Case ser(heatBed(350), kSelf, {1, 1, 1});
   for (int s = 0; s < steps; ++s) {
     par.dem->substep();
     ser.dem->substep();
@@ -226,7 +208,7 @@ double bedAgainstSerial(Case& par, int steps) {
 }
 
 TEST(DemHeat, BedTemperaturesMatchSerial) {
-  Case par(bedCase(350));
+  Case par(heatBed(350));
   const double d = bedAgainstSerial(par, 500);
   if (par.dec.comm().isRoot())
     std::printf("bed vs serial, %d ranks (grid %d x %d x %d): max |dT|/100 K = %.3e\n",
@@ -235,7 +217,7 @@ TEST(DemHeat, BedTemperaturesMatchSerial) {
 }
 
 TEST(DemHeat, BedTemperaturesMatchSerialTiled) {
-  const std::string text = bedCase(350);
+  const std::string text = heatBed(350);
   const coloc::GlobalGrid g = coloc::gridFromConfig(demtest::config(text));
   const coloc::Comm world = coloc::Comm::world();
   coloc::TiledOptions opt;
@@ -250,7 +232,7 @@ TEST(DemHeat, BedTemperaturesMatchSerialTiled) {
 }
 
 TEST(DemHeat, RestoreContinuesTemperaturesBitForBit) {
-  Case a(bedCase(350));
+  Case a(heatBed(350));
   for (int s = 0; s < 200; ++s) a.dem->substep();
   coloc::dem::DemState st = a.dem->saveState();
   coloc::dem::DemSolver b(a.dec, a.cfg, a.timers, std::move(st));
@@ -269,6 +251,11 @@ TEST(DemHeat, RestoreContinuesTemperaturesBitForBit) {
   for (long k = 0; k < kBedN; ++k)
     differ += ta[static_cast<std::size_t>(k)] != tb[static_cast<std::size_t>(k)];
   EXPECT_EQ(differ, 0);
+  // ... and the energy accounts: every rank continues its own shares
+  const auto ha = a.dem->diagnostics()["heat"], hb = b.diagnostics()["heat"];
+  for (const char* k : {"enthalpy", "enthalpy_initial", "wall_heat_in", "ext_heat_in",
+                        "inflow_enthalpy_in", "outflow_enthalpy_out", "energy_balance"})
+    EXPECT_EQ(hb[k].get<double>(), ha[k].get<double>()) << k;
   // a re-balance: the state restored onto a serial solver on rank 0 keeps every temperature
   coloc::dem::DemState st2 = b.saveState();
   std::vector<double> t2(static_cast<std::size_t>(kBedN), 0.0);
@@ -285,7 +272,7 @@ TEST(DemHeat, RestoreContinuesTemperaturesBitForBit) {
 TEST(DemHeat, RebalanceOntoTiledBoxesKeepsTemperatures) {
   // the state of a process-grid run restored onto tiled boxes (an in-memory re-balance): every
   // temperature arrives unchanged, and the two runs continue together to round-off
-  const std::string text = bedCase(350);
+  const std::string text = heatBed(350);
   Case a(text);
   for (int s = 0; s < 200; ++s) a.dem->substep();
   const coloc::GlobalGrid g = coloc::gridFromConfig(a.cfg);
@@ -320,7 +307,7 @@ TEST(DemHeat, RebalanceOntoTiledBoxesKeepsTemperatures) {
 }
 
 TEST(DemHeat, OffMeansNoFields) {
-  const std::string on = bedCase(0);
+  const std::string on = heatBed(0);
   std::string off = on;
   off.replace(off.find("\"heat\": true"), 12, "\"heat\": false");
   Case c(off);
@@ -332,7 +319,7 @@ TEST(DemHeat, OffMeansNoFields) {
 }
 
 TEST(DemHeat, MaterialWithoutHeatCapacityIsRefused) {
-  std::string text = bedCase(0);
+  std::string text = heatBed(0);
   text.replace(text.find("\"heat_capacity\": 0.2, "), 22, "");
   try {
     Case c(text);

@@ -28,6 +28,45 @@ inline coloc::Config config(const std::string& json,
   return coloc::Config::fromText(json, "test", overrides, schema());
 }
 
+/// The open channel of the parallel and heat tests, fluid only: a box of 1.3 x 0.9 x 0.7 m on
+/// 13 x 9 x 7 cells (blocks that do not divide evenly), periodic along z, gravity -1 m/s^2 along
+/// y, an inlet on xlo at (1, 0.1, 0.05) m/s, an outlet on xhi, a wall on ylo, a lid moving at
+/// (0.3, 0, 0.2) m/s on yhi. `fluid`: more keys of "fluid" (each followed by a comma);
+/// `pressure`: the keys of fluid.pressure; `inlet`, `wall`: more keys of the inlet and of the ylo
+/// wall (each after a comma).
+inline std::string channelCase(const std::string& fluid, const std::string& pressure,
+                               const std::string& inlet = "", const std::string& wall = "") {
+  return R"({
+  "run": {"mode": "fluid"},
+  "gravity": [0.0, -1.0, 0.0],
+  "domain": {"length": [1.3, 0.9, 0.7], "cells": [13, 9, 7], "periodic": {"z": true}},
+  "fluid": {"nu": 0.01, )" +
+         fluid + R"("adaptive_dt": true, "dt": 0.05, "cfl": 0.4, "pressure": {)" + pressure +
+         R"(},
+            "boundary": {"xlo": {"type": "inlet", "velocity": [1.0, 0.1, 0.05])" +
+         inlet + R"(},
+                         "xhi": {"type": "outlet"},
+                         "ylo": {"type": "wall")" +
+         wall + R"(},
+                         "yhi": {"type": "wall", "velocity": [0.3, 0.0, 0.2]}}}
+})";
+}
+
+/// The channel with fluid.heat (rho 2, k 0.05, c_p 3, T0 320 K; the inlet at 350 K, the ylo wall
+/// at 300 K, the lid adiabatic); `tol`: the pressure tolerance (fluid.pressure.tol).
+inline std::string heatChannelCase(const std::string& tol) {
+  return channelCase(R"("rho": 2.0, "heat": true, "conductivity": 0.05, "heat_capacity": 3.0, )"
+                     R"("initial_temperature": 320.0, )",
+                     R"("tol": )" + tol + R"(, "max_iter": 400)", R"(, "temperature": 350.0)",
+                     R"(, "temperature": 300.0)");
+}
+
+/// The channel's fluid fraction at x and time t (0.6 .. 0.95, moving).
+inline double channelEps(const coloc::Real3& x, double t) {
+  return 0.75 + 0.15 * std::sin(4.0 * x[0] - 3.0 * t) * std::cos(3.0 * x[1]) +
+         0.05 * std::cos(2 * M_PI * x[2] / 0.7);
+}
+
 /// Owned faces of component d: [0,n) plus face n at a non-periodic high box face.
 inline coloc::IndexBox ownedFaces(const coloc::Decomposition& dec, int d) {
   return coloc::faceOwned(dec, d);

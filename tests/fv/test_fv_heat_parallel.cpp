@@ -17,26 +17,13 @@ using namespace coloc;
 
 namespace {
 
-const char* kCase = R"({
-  "run": {"mode": "fluid"},
-  "gravity": [0.0, -1.0, 0.0],
-  "domain": {"length": [1.3, 0.9, 0.7], "cells": [13, 9, 7], "periodic": {"z": true}},
-  "fluid": {"nu": 0.01, "adaptive_dt": true, "dt": 0.05, "cfl": 0.4, "rho": 2.0,
-            "heat": true, "conductivity": 0.05, "heat_capacity": 3.0,
-            "initial_temperature": 320.0, "pressure": {"tol": 1e-12, "max_iter": 400},
-            "boundary": {"xlo": {"type": "inlet", "velocity": [1.0, 0.1, 0.05],
-                                 "temperature": 350.0},
-                         "xhi": {"type": "outlet"},
-                         "ylo": {"type": "wall", "temperature": 300.0},
-                         "yhi": {"type": "wall", "velocity": [0.3, 0.0, 0.2]}}}
-})";
+const std::string kCase = fvtest::heatChannelCase("1e-12");
 
 void setInputs(fv::FluidSolver& s, const Decomposition& dec, double t) {
   auto& f = s.edit();
   forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
     const Real3 x = fvtest::cellPos(dec, i, j, k);
-    f.eps(i, j, k) = 0.75 + 0.15 * std::sin(4.0 * x[0] - 3.0 * t) * std::cos(3.0 * x[1]) +
-                     0.05 * std::cos(2 * M_PI * x[2] / 0.7);
+    f.eps(i, j, k) = fvtest::channelEps(x, t);
     f.heatSource(i, j, k) = 0.02 * (1.0 + std::sin(5 * x[0]) * std::cos(3 * x[1]));
   });
 }

@@ -27,32 +27,17 @@ using namespace coloc;
 
 namespace {
 
-const char* kCase = R"({
-  "run": {"mode": "fluid"},
-  "gravity": [0.0, -1.0, 0.0],
-  "domain": {"length": [1.3, 0.9, 0.7], "cells": [13, 9, 7], "periodic": {"z": true}},
-  "fluid": {"nu": 0.01, "convection": "tvd", "adaptive_dt": true, "dt": 0.05, "cfl": 0.4,
-            "pressure": {"tol": 1e-10},
-            "boundary": {"xlo": {"type": "inlet", "velocity": [1.0, 0.1, 0.05]},
-                         "xhi": {"type": "outlet"},
-                         "ylo": {"type": "wall"},
-                         "yhi": {"type": "wall", "velocity": [0.3, 0.0, 0.2]}}}
-})";
+const std::string kCase = fvtest::channelCase(R"("convection": "tvd", )", R"("tol": 1e-10)");
 
 constexpr int kSteps = 12;
 constexpr double kTol = 1e-10;
-
-double epsAt(const Real3& x, double t) {
-  return 0.75 + 0.15 * std::sin(4.0 * x[0] - 3.0 * t) * std::cos(3.0 * x[1]) +
-         0.05 * std::cos(2 * M_PI * x[2] / 0.7);
-}
 
 /// Set eps^{n+1}(t), K and K u_p on owned cells.
 void setInputs(fv::FluidSolver& s, const Decomposition& dec, double t) {
   auto& f = s.edit();
   forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
     const Real3 x = fvtest::cellPos(dec, i, j, k);
-    f.eps(i, j, k) = epsAt(x, t);
+    f.eps(i, j, k) = fvtest::channelEps(x, t);
     f.K(i, j, k) = 2.0 + std::sin(5 * x[0]) * std::sin(7 * x[1]);
     f.KUp[0](i, j, k) = 0.3 * f.K(i, j, k);
     f.KUp[1](i, j, k) = -0.1 * x[0] * f.K(i, j, k);

@@ -12,7 +12,9 @@
 //   /fluid                u_x u_y u_z (faces), p eps eps_old K (cells), KUp [nz][ny][nx][3],
 //                         H_x H_y H_z (AB2 history, faces) + the solver's counters as attributes
 //   /particles            id material x v omega f torque f_ext radius mass (rows by rank) +
-//                         time, steps, rebuilds, count
+//                         time, steps, rebuilds, count, flow; particles.heat: extra/temperature,
+//                         extra/heat_ext, attribute heat (the energy accounts' totals) and
+//                         heat_shares [ranks][3] (each writing rank's wall, ext, outflow terms)
 //   /particles/contacts   holder partner shear [M][3] roll [M][3]
 //
 // Every function is collective over the communicator of the file or the decomposition.
@@ -88,9 +90,9 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
 dem::DemState readDemState(H5File& file, const std::string& group);
 /// Semantic checks of a restored particle state (collective): ids non-negative and unique over
 /// all ranks, mass and radius positive and finite, materials among the case's `materials`,
-/// positions finite and inside the box (any value along a periodic axis), velocities and forces
-/// finite, every contact history held by and pointing at an existing particle. Throws Error on
-/// every rank naming the file `path` and the dataset.
+/// positions finite and inside the box (any value along a periodic axis), velocities, forces and
+/// energy accounts finite, every contact history held by and pointing at an existing particle.
+/// Throws Error on every rank naming the file `path` and the dataset.
 void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid& grid,
                       std::size_t materials, const std::string& path,
                       const std::string& group = "/particles");

@@ -17,7 +17,7 @@
 //   refreshCellVelocity()        cell-centred u^{n+1} (and grad p^{n+1})    (fluid)
 //   sampleFluidForForces()       u^{n+1}, grad p^{n+1} at the particles      (coupling)
 //   applyCouplingForces()        F = beta (u - v) - V_p rho_f grad p         (coupling)
-//   applyCouplingHeat()          q = H' (T_f - T_p) with convection          (coupling)
+//   applyCouplingHeat()          q = H' (Tmean - T_p) with convection        (coupling)
 //   handForcesToParticles()      forces -> the DEM's external force array    (inter-physics, local:
 //                                co-located, the force kernel stores into that array directly)
 //   advanceParticles()           n_sub DEM sub-steps                         (particles)
@@ -71,6 +71,11 @@
 namespace coloc::coupling {
 
 class ParticleCoupling;
+
+/// checks.energy_balance of a run with heat on both sides: |gain of the fluid's and the
+/// particles' enthalpies - heat in through faces, walls and the particles' inflow and outflow|,
+/// relative (the reports' fluid_heat and particles.heat objects).
+double energyBalance(const Json& fluidHeat, const Json& particleHeat);
 
 /// Declares the "coupling.*" keys.
 void declareConfig(Schema& s);
@@ -186,9 +191,8 @@ class Simulation {
   void waitForSlowestRank();
   void gatherParticles();
   void computeStencils();
-  /// The fields the drag samples (eps, u, grad p, and T with convection; smoothed copies with
-  /// coupling.smoothing).
-  using DragFields = std::array<const CellField*, 8>;
+  /// The 7 fields the drag samples (eps, u, grad p; smoothed copies with coupling.smoothing).
+  using DragFields = std::array<const CellField*, 7>;
   DragFields fluidForDrag();
   /// The fields sampled at the particles, the drag law and the particles' response
   /// (ParticleCoupling; none sampled at set-up: fields null).
@@ -196,10 +200,6 @@ class Simulation {
   void depositParticles();
   void sumDepositsAcrossBlocks();
   void updateFluidCoefficients();
-  /// Convection: the fluid's heat source is explicit, so it must not move a cell's temperature
-  /// past its particles' in one step: dt sum H' / (rho_f c_f eps V) <= 1 in every cell
-  /// (coloc::Error on every rank otherwise).
-  void checkHeatSourceNumber(double dt);
   void advanceFluid(double dt);
   /// What the coupling hands the fluid for a step: eps^{n+1}, K, K u_p (owned cells).
   fv::CouplingInputs fluidInputs() const;
@@ -233,11 +233,11 @@ class Simulation {
   CellField solid_, scratch_, eps_, K_;
   std::array<CellField, 3> KUp_;
   std::array<CellField, 3> uSmooth_, gradPSmooth_;
-  // Convection: the heat the particles give each cell (W) and sum H' (W/K), deposited with the
-  // drag's terms and summed across blocks with them; the smoothed copy of T.
+  // Convection: sum H' T_p (W) and sum H' (W/K) of each cell's particles, deposited with the
+  // drag's terms and summed across blocks with them (the fluid's inputs); the step's mean fluid
+  // temperature with mirrored wall ghosts, and its smoothed copy.
   bool convects_ = false;
-  CellField heatSource_, heatCoefficient_, TSmooth_;
-  double heatSourceNumber_ = 0;  // the largest dt sum H' / (rho_f c_f eps V) of the run
+  CellField heatSource_, heatCoefficient_, TMean_, TSmooth_;
   double biotMax_ = 0;
   int smoothingPasses_ = 0;
   std::array<CellField, 3> uCell_, uCellOld_, gradP_;

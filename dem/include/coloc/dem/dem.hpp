@@ -102,6 +102,19 @@ struct DemFlow {
   static DemFlow unpack(const std::vector<double>& v);
 };
 
+/// The particles' energy accounts (particles.heat; docs/heat.md, "Particles"), J. In the states
+/// of a run's ranks the global ones are the same in every state and the shares add up over the
+/// states to the run's totals: a restore on any rank count keeps each share once (a rank keeps
+/// the shares of the state it passes), so the report's sums are unchanged, and on the same
+/// ranks every rank continues its own share bit for bit.
+struct DemHeat {
+  bool known = false;            // false: none (particles.heat off, or a file from before them)
+  double enthalpyInitial = 0;    // global: the particles' enthalpy when the run started
+  double inflowIn = 0;           // global: enthalpy brought by the inflow sources
+  double wallIn = 0, extIn = 0;  // shares: heat in through the walls, from heat_ext
+  double outflowOut = 0;         // share: enthalpy of the particles removed at outflow faces
+};
+
 /// The complete restartable state of one rank's owned particles (checkpoint/restart and
 /// re-balancing). particles holds owned particles only (nGhost = 0): every field of the table in
 /// kOpState (with f, torque and fExt, and the extra fields registered with kOpState).
@@ -120,6 +133,7 @@ struct DemState {
   double time = 0;
   long long steps = 0, rebuilds = 0;
   DemFlow flow;  // the same on every rank
+  DemHeat heat;  // particles.heat: the energy accounts
 };
 
 /// The DEM's bins for blocks with these cuts (the rule every DemSolver applies:

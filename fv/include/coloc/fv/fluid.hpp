@@ -68,6 +68,12 @@ struct CouplingInputs {
   /// fluid.heat: the heat the particles give the fluid in each cell (W); null: none this step
   /// (the source stays as it was). Ignored with fluid.heat off.
   const CellField* heatSource = nullptr;
+  /// fluid.heat, convection: the exchange coefficient of the particles in each cell, sum H (W/K).
+  /// With it the particles' heat is point-implicit in the fluid's temperature: each cell receives
+  /// heatSource - heatCoefficient T at every heat sub-step, T the cell's new temperature (so
+  /// heatSource is sum H T_p), and the step leaves the sub-steps' mean temperature in Tmean (the
+  /// temperature the exchange saw, for the particles' side). Null: the explicit source above.
+  const CellField* heatCoefficient = nullptr;
 };
 
 struct FluidFields {
@@ -79,6 +85,9 @@ struct FluidFields {
   // fluid.heat only (empty, unallocated, when off):
   CellField T;           // fluid temperature (K); ghosts current after a step
   CellField heatSource;  // heat given to the fluid in each cell (W), owned cells read
+  // with CouplingInputs::heatCoefficient only (allocated by the first step that gives one):
+  CellField heatCoefficient;  // sum H of the cell's particles (W/K)
+  CellField Tmean;            // mean of T over the last step's sub-steps (K); halo ghosts current
 };
 
 class FluidSolver {
@@ -90,6 +99,8 @@ class FluidSolver {
 
   /// The state, read only (no effect on the solver).
   const FluidFields& fields() const;
+  /// fluid.heat is on: the fields have T and heatSource, the counters their energy accounts.
+  bool hasHeat() const;
   /// The state, to write outside a step (initial conditions, tests, restart): the next step
   /// refreshes every ghost layer and rebuilds the pressure matrix, and nextDt() recomputes the
   /// velocity rate.

@@ -1,0 +1,50 @@
+// Helpers of the particle heat tests (particles.heat; docs/heat.md, "Particles"): the hot-bed
+// case, values of a per-particle field by id, and the energy accounts of the report.
+#pragma once
+
+#include <cstdio>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "coloc/core/comm.hpp"
+#include "coloc/dem/dem.hpp"
+
+namespace demtest {
+
+/// A box of 12 mm with a lattice of 5 x 5 x 6 spheres (r = 1 mm) slightly overlapping (spacing
+/// 1.98 mm), under gravity: the lower three layers at 400 K, the upper three at 300 K; walls at
+/// wallT (0: adiabatic). kHeatBedN particles, ids 0 .. kHeatBedN - 1.
+inline std::string heatBed(double wallT) {
+  char buf[2048];
+  std::snprintf(buf, sizeof buf, R"({
+  "domain": {"length": [0.012, 0.012, 0.012], "cells": [6, 6, 6]},
+  "gravity": [0, 0, -9.81],
+  "particles": {
+    "dt": 1e-5, "heat": true, "wall_temperature": %.17g,
+    "materials": [{"density": 2500, "young": 1e7, "restitution": 0.5,
+                   "heat_capacity": 0.2, "conductivity": 2}],
+    "sources": [{"type": "lattice", "lo": [0.00204, 0.00204, 0.00101], "counts": [5, 5, 3],
+                 "spacing": [0.00198, 0.00198, 0.00198], "radius": 0.001, "temperature": 400},
+                {"type": "lattice", "lo": [0.00204, 0.00204, 0.00695], "counts": [5, 5, 3],
+                 "spacing": [0.00198, 0.00198, 0.00198], "radius": 0.001, "temperature": 300}]
+  }
+})",
+                wallT);
+  return buf;
+}
+constexpr long kHeatBedN = 150;
+
+/// The extra field `name` of the owned particles with ids 0 .. n-1, by id, over all ranks of
+/// `comm` (0 for an id no rank holds). Collective.
+inline std::vector<double> fieldById(const coloc::dem::ParticleStore& p, const coloc::Comm& comm,
+                                     long n, const char* name = "temperature") {
+  std::vector<double> t(static_cast<std::size_t>(n), 0.0);
+  const auto& f = p.field(name);
+  for (std::size_t i = 0; i < p.nOwned; ++i)
+    if (p.id[i] >= 0 && p.id[i] < n) t[static_cast<std::size_t>(p.id[i])] = f[i];
+  comm.sumInPlace(std::span<double>(t));
+  return t;
+}
+
+}  // namespace demtest
