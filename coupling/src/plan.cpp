@@ -102,10 +102,14 @@ int fluidOwner(const GlobalGrid& g, const Blocks& b, const double* x) {
 long long substepsPerStep(const Config& cfg, RunMode mode) {
   switch (mode) {
     case RunMode::FluidOnly:
-    case RunMode::DummyDem:  // frozen: no sub-step exchanges anything
       return 0;
     case RunMode::ParticlesOnly:
       return std::max<long long>(1, cfg.integer("coupling.dem_substeps"));
+    case RunMode::DummyDem:
+      // frozen: a sub-step exchanges nothing, except with particles.heat, where it refreshes the
+      // ghosts' temperatures (the DEM's ghost update; dem.cpp, frozenSubstep)
+      if (!cfg.boolean("particles.heat")) return 0;
+      [[fallthrough]];
     case RunMode::Coupled: {
       const long long n = cfg.integer("coupling.dem_substeps");
       if (n > 0) return n;

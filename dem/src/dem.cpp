@@ -48,7 +48,7 @@ using namespace detail;
 
 // One sub-step, phase by phase (as LAMMPS's verlet.cpp sequences its parts).
 void DemSolver::Impl::substep() {
-  if (frozen) return advanceClock();
+  if (frozen) return frozenSubstep();
   if (!inflow.empty()) timed(Phase::DemNeighbour, [&] { insertInflow(); });
   timed(Phase::DemIntegrate, [&] { integrator.initialIntegrate(p, forces); });
   timers.syncPoint(comm);
@@ -61,6 +61,20 @@ void DemSolver::Impl::substep() {
     integrator.finalIntegrate(p);
     if (heat.on) heat.integrate(p, integrator.dt);
   });
+  advanceClock();
+}
+
+// A frozen sub-step (run.mode dummy_dem): nothing moves, no force is computed. With
+// particles.heat the temperatures still evolve as in a sub-step of particles at rest: the ghosts'
+// temperatures refreshed, conduction through the contacts of the frozen positions (the neighbour
+// lists built at set-up stay valid: nothing moves), T integrated with the held heat_ext. With heat
+// off it only advances the clock, as before.
+void DemSolver::Impl::frozenSubstep() {
+  if (heat.on) {
+    timed(Phase::DemGhost, [&] { exchange->updateGhosts(); });
+    timed(Phase::DemForce, [&] { heat.conduct(p, search); });
+    timed(Phase::DemIntegrate, [&] { heat.integrate(p, integrator.dt); });
+  }
   advanceClock();
 }
 

@@ -123,6 +123,8 @@ struct DemSolver::Impl {
 
   // dem.cpp: the step
   void substep();
+  /// A sub-step of frozen particles: with heat on, ghost temperatures, conduction, T.
+  void frozenSubstep();
   /// The clock after a sub-step (steps, time).
   void advanceClock();
   /// f() timed as phase ph.

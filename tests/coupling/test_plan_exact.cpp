@@ -60,6 +60,28 @@ const char* kHeatedBed = R"({
   "coupling": { "heat_transfer": "gunn" }
 })";
 
+// The channel heated, particles frozen (run.mode dummy_dem): a frozen sub-step with particles.heat
+// refreshes the ghosts' temperatures (the DEM's ghost update, every sub-step), Gunn convection.
+const char* kHeatedChannel = R"({
+  "domain": { "length": [0.32, 0.08, 0.08], "cells": [16, 8, 8],
+              "periodic": { "y": true, "z": true } },
+  "run": { "mode": "dummy_dem", "steps": 1 },
+  "fluid": { "nu": 1e-6, "rho": 1000.0, "dt": 2e-4, "initial_velocity": [0.05, 0.0, 0.0],
+             "heat": true, "conductivity": 0.6, "heat_capacity": 4180.0,
+             "initial_temperature": 300.0,
+             "boundary": { "xlo": { "type": "inlet", "velocity": [0.05, 0.0, 0.0],
+                                    "temperature": 350.0 },
+                           "xhi": { "type": "outlet", "pressure": 0.0 } } },
+  "particles": {
+    "dt": 1e-4, "heat": true,
+    "materials": [ { "density": 1000.0, "young": 1e5, "poisson": 0.3,
+                     "heat_capacity": 840.0, "conductivity": 1.0 } ],
+    "sources": [ { "type": "random", "lo": [0.0, 0.0, 0.0], "hi": [0.32, 0.08, 0.08],
+                   "count": 1200, "radius": 0.002, "velocity_spread": 0.0 } ]
+  },
+  "coupling": { "heat_transfer": "gunn" }
+})";
+
 struct Param {
   const char* name;
   const char* text;
@@ -123,5 +145,7 @@ INSTANTIATE_TEST_SUITE_P(
         Param{"periodic", kPeriodic, "independent"}, Param{"bed", kBed, "tiled"},
         Param{"channel", kChannel, "tiled"}, Param{"periodic", kPeriodic, "tiled"},
         Param{"heated", kHeatedBed, "uniform"}, Param{"heated", kHeatedBed, "independent"},
-        Param{"heated", kHeatedBed, "tiled"}),
+        Param{"heated", kHeatedBed, "tiled"}, Param{"heated_frozen", kHeatedChannel, "uniform"},
+        Param{"heated_frozen", kHeatedChannel, "independent"},
+        Param{"heated_frozen", kHeatedChannel, "tiled"}),
     [](const auto& info) { return std::string(info.param.name) + "_" + info.param.strategy; });
