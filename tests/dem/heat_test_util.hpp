@@ -12,6 +12,29 @@
 
 namespace demtest {
 
+/// The periodic chain of the heat tests: four spheres of r = kChainR along x at spacing kChainS
+/// (overlap kChainDelta with each neighbour, across the periodic face too), alternating
+/// materials 0 (k 1, c_p 1; 400 K) and 1 (k 3, c_p 2; 300 K): k_eff = 1.5 W/(m K).
+constexpr double kChainR = 1e-3, kChainDelta = 1e-5, kChainS = 2 * kChainR - kChainDelta;
+inline std::string chainCase() {
+  char buf[2048];
+  std::snprintf(buf, sizeof buf, R"({
+  "domain": {"length": [%.17g, 0.012, 0.012], "cells": [4, 12, 12],
+             "periodic": {"x": true, "y": false, "z": false}},
+  "particles": {
+    "dt": 1e-5, "heat": true,
+    "materials": [{"density": 2500, "young": 1e7, "heat_capacity": 1, "conductivity": 1},
+                  {"density": 2500, "young": 1e7, "heat_capacity": 2, "conductivity": 3}],
+    "sources": [{"type": "list", "material": 0, "radius": 0.001, "temperature": 400,
+                 "positions": [%.17g, 0.006, 0.006, %.17g, 0.006, 0.006]},
+                {"type": "list", "material": 1, "radius": 0.001, "temperature": 300,
+                 "positions": [%.17g, 0.006, 0.006, %.17g, 0.006, 0.006]}]
+  }
+})",
+                4 * kChainS, 0.5 * kChainS, 2.5 * kChainS, 1.5 * kChainS, 3.5 * kChainS);
+  return buf;
+}
+
 /// A box of 12 mm with a lattice of 5 x 5 x 6 spheres (r = 1 mm) slightly overlapping (spacing
 /// 1.98 mm), under gravity: the lower three layers at 400 K, the upper three at 300 K; walls at
 /// wallT (0: adiabatic). kHeatBedN particles, ids 0 .. kHeatBedN - 1.

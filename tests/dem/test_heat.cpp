@@ -47,31 +47,12 @@ std::vector<double> temperatures(Case& c, long n) {
 // (k 3, c_p 2): k_eff = 1.5 W/(m K).
 constexpr double kR = 1e-3, kDelta = 1e-5, kS = 2 * kR - kDelta, kL = 4 * kS;
 
-std::string chainCase() {
-  char buf[2048];
-  std::snprintf(buf, sizeof buf, R"({
-  "domain": {"length": [%.17g, 0.012, 0.012], "cells": [4, 12, 12],
-             "periodic": {"x": true, "y": false, "z": false}},
-  "particles": {
-    "dt": 1e-5, "heat": true,
-    "materials": [{"density": 2500, "young": 1e7, "heat_capacity": 1, "conductivity": 1},
-                  {"density": 2500, "young": 1e7, "heat_capacity": 2, "conductivity": 3}],
-    "sources": [{"type": "list", "material": 0, "radius": 0.001, "temperature": 400,
-                 "positions": [%.17g, 0.006, 0.006, %.17g, 0.006, 0.006]},
-                {"type": "list", "material": 1, "radius": 0.001, "temperature": 300,
-                 "positions": [%.17g, 0.006, 0.006, %.17g, 0.006, 0.006]}]
-  }
-})",
-                kL, 0.5 * kS, 2.5 * kS, 1.5 * kS, 3.5 * kS);
-  return buf;
-}
-
 TEST(DemHeat, TwoBodyContactConductance) {
   const int P = coloc::Comm::world().size();
   // 1 and 2 ranks along x (the contacts straddle the rank face and the periodic face); more
   // ranks along y
   const coloc::Int3 dims = P <= 2 ? coloc::Int3{P, 1, 1} : coloc::Int3{1, P, 1};
-  Case c(chainCase(), coloc::Comm::world(), dims);
+  Case c(demtest::chainCase(), coloc::Comm::world(), dims);
   const double m = c.p().nOwned > 0 ? c.p().mass[0] : 0;
   const double mass = c.dec.comm().max(m);
   const double C1 = mass * 1, C2 = mass * 2;

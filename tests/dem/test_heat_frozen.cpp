@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "dem_test_util.hpp"
+#include "heat_test_util.hpp"
 
 namespace {
 
@@ -42,28 +43,6 @@ double maxDiff(const std::vector<double>& a, const std::vector<double>& b) {
 
 // r = 1 mm, spacing s = 2r - delta, delta = 10 um; materials 0 (k 1, c_p 1) and 1 (k 3, c_p 2).
 constexpr double kR = 1e-3, kDelta = 1e-5, kS = 2 * kR - kDelta;
-
-/// The periodic chain of tests/dem/test_heat.cpp: four spheres along x, alternating materials
-/// (400 K, 300 K).
-std::string chainCase() {
-  const double L = 4 * kS;
-  char buf[2048];
-  std::snprintf(buf, sizeof buf, R"({
-  "domain": {"length": [%.17g, 0.012, 0.012], "cells": [4, 12, 12],
-             "periodic": {"x": true, "y": false, "z": false}},
-  "particles": {
-    "dt": 1e-5, "heat": true,
-    "materials": [{"density": 2500, "young": 1e7, "heat_capacity": 1, "conductivity": 1},
-                  {"density": 2500, "young": 1e7, "heat_capacity": 2, "conductivity": 3}],
-    "sources": [{"type": "list", "material": 0, "radius": 0.001, "temperature": 400,
-                 "positions": [%.17g, 0.006, 0.006, %.17g, 0.006, 0.006]},
-                {"type": "list", "material": 1, "radius": 0.001, "temperature": 300,
-                 "positions": [%.17g, 0.006, 0.006, %.17g, 0.006, 0.006]}]
-  }
-})",
-                L, 0.5 * kS, 2.5 * kS, 1.5 * kS, 3.5 * kS);
-  return buf;
-}
 
 /// A periodic simple cubic lattice of 4 x 4 x 4 spheres at spacing s (each touches six
 /// neighbours at the overlap delta): the half x < 2s of material 0 at 400 K, the other half of
@@ -109,8 +88,8 @@ double maxSpeed(Case& c) {
 TEST(DemHeatFrozen, ChainFrozenEqualsAtRest) {
   const int P = coloc::Comm::world().size();
   const coloc::Int3 dims{P, 1, 1};  // contacts straddle the rank face and the periodic face
-  Case frozen(chainCase(), coloc::Comm::world(), dims),
-      rest(chainCase(), coloc::Comm::world(), dims);
+  Case frozen(demtest::chainCase(), coloc::Comm::world(), dims),
+      rest(demtest::chainCase(), coloc::Comm::world(), dims);
   frozen.dem->setFrozen(true);
   const auto t0 = temperatures(frozen, 4);
   const auto x0 = demtest::table(frozen, 4);
