@@ -1,7 +1,5 @@
 #include "coloc/coupling/simulation.hpp"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -420,22 +418,19 @@ void Simulation::applyCouplingForces(double dt) {
 void Simulation::applyCouplingHeat(double dt) {
   if (!convects_) return;
   ScopedPhase t(timers_, Phase::CouplingDrag);
-  // sums: the heat the particles receive over the step, the heat the fluid's cells received
-  // (sum H' T_p - sum H' Tmean per cell, what its implicit exchange took), the gross exchanged
-  // heat (the scale of round-off).
+  // sums: the heat the particles receive over the step, the gross exchanged heat (the scale of
+  // round-off; both from applyHeat), the heat the fluid's cells received (sum H' T_p - sum H'
+  // Tmean per cell, what its implicit exchange took).
   double sums[3] = {0, 0, 0};
-  double particle[2] = {0, 0};
-  coupling_->applyHeat(transfer_->heatTarget(), dt, particle);
-  sums[0] = particle[0];
-  sums[2] = particle[1];
+  coupling_->applyHeat(transfer_->heatTarget(), dt, sums);
   const CellField& Tmean = fluid_->fields().Tmean;
   forEach(heatSource_.interior(), [&](int i, int j, int k) {
-    sums[1] += (heatSource_(i, j, k) - heatCoefficient_(i, j, k) * Tmean(i, j, k)) * dt;
+    sums[2] += (heatSource_(i, j, k) - heatCoefficient_(i, j, k) * Tmean(i, j, k)) * dt;
   });
   dec_.comm().sumInPlace(std::span<double>(sums, 3));
   biotMax_ = std::max(biotMax_, dec_.comm().max(coupling_->biotMax()));
-  if (sums[2] > 0)
-    run_.heatResidual = std::max(run_.heatResidual, std::abs(sums[0] + sums[1]) / sums[2]);
+  if (sums[1] > 0)
+    run_.heatResidual = std::max(run_.heatResidual, std::abs(sums[0] + sums[2]) / sums[1]);
 }
 
 void Simulation::handForcesToParticles() {
