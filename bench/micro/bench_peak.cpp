@@ -248,6 +248,14 @@ void BM_Chase(benchmark::State& state) {
 
 BENCHMARK(BM_MulAdd)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Fma)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_ReadSum)->Arg(1)->Arg(16)->Arg(256)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_Triad)->Arg(1)->Arg(16)->Arg(256)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ReadSum)
+    ->Arg(1)
+    ->Arg(4)
+    ->Arg(16)
+    ->Arg(32)
+    ->Arg(64)
+    ->Arg(256)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Triad)->Arg(1)->Arg(4)->Arg(16)->Arg(32)->Arg(64)->Arg(256)->Unit(
+    benchmark::kMicrosecond);
 BENCHMARK(BM_Chase)->Arg(1)->Arg(16)->Arg(256)->Unit(benchmark::kMillisecond);
