@@ -2,7 +2,8 @@
 """Each kernel of coloc against its own limit: a roofline table from a run's report.json.
 
     build/bench/bench_peak --benchmark_out=peak.json --benchmark_out_format=json
-    mpirun -n 1 build/bench/bench_stream --mib 3 --mib 12 --mib 48 --mib 256 --json stream.json
+    mpirun -n 1 build/bench/bench_stream --mib 1 --mib 3 --mib 12 --mib 24 --mib 48 --mib 96 \\
+        --mib 256 --json stream.json
     BED=$(bench/scripts/dense_bed.py bench/cases/case3-small.json)
     build/coloc run bench/cases/case3-small.json --set "$BED" --set run.steps=10 --out R
     build/coloc run bench/cases/case3-small.json --set "$BED" --set run.steps=3 \\
@@ -326,14 +327,15 @@ def si(x, unit=""):
 
 
 def render(t, markdown):
-    head = ["kernel", "unit", "units/pass", "B/unit", "flop/unit", "AI", "roof", "bound/s",
-            "achieved/s", "fraction", "binds"]
+    head = ["kernel", "unit", "units/pass", "B/unit", "flop/unit", "AI", "working set", "roof",
+            "bound/s", "achieved/s", "fraction", "binds"]
     out = []
     for r in t["rows"]:
         roof = (f"{si(r['bandwidth_Bps'], 'B/s')}" if r["binds"] == "memory"
                 else f"{si(r['peak_flops'], 'flop/s')}")
         out.append([r["kernel"], r["unit"], si(r["units_per_pass"]), f"{r['bytes_per_unit']:.0f}",
-                    f"{r['flops_per_unit']:.0f}", f"{r['arithmetic_intensity']:.2f}", roof,
+                    f"{r['flops_per_unit']:.0f}", f"{r['arithmetic_intensity']:.2f}",
+                    f"{r['working_set_bytes'] / 1048576:.3g} MiB", roof,
                     si(r["bound_units_per_s"]), si(r["achieved_units_per_s"]),
                     f"{100 * r['fraction_of_bound']:.2g} %", r["binds"]])
     lines = []
