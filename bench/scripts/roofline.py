@@ -183,8 +183,18 @@ KERNELS = [
 
 ISA_PEAK = {  # bench_peak benchmark whose flops counter is the ceiling of an instruction set
     "scalar": "BM_MulAdd/0", "sse2": "BM_MulAdd/1", "avx2": "BM_MulAdd/2",
-    "avx512": "BM_MulAdd/3", "avx512_fma": "BM_Fma/2",
+    "avx512": "BM_MulAdd/3", "avx2_fma": "BM_Fma/1", "avx512_fma": "BM_Fma/2",
 }
+# a CPU without an instruction set (bench_peak skips it) runs the -march=native DEM and SLEEF's
+# dispatch on the next narrower one
+ISA_FALLBACK = {"avx512": "avx2", "avx2": "sse2", "avx512_fma": "avx2_fma", "avx2_fma": "sse2"}
+
+
+def isa_peak(pk, isa):
+    """(instruction set, flop/s): `isa`, or the widest narrower one measured."""
+    while isa not in pk and isa in ISA_FALLBACK:
+        isa = ISA_FALLBACK[isa]
+    return isa, pk[isa]
 
 # ---------------------------------------------------------------------------------------------
 # the counts of a run
@@ -294,14 +304,14 @@ def table(rep, peak_rows, stream=None, rebuild=None):
         busy = timer["busy_avg"] / passes[k["per"]]  # seconds a pass, one rank
         ws = sum(c[w[0]] * w[1] for w in k["working_set"]) if "working_set" in k else nbytes
         bw = bandwidth_at(curve, ws)
-        peak = pk[k["isa"]]
+        isa, peak = isa_peak(pk, k["isa"])
         ai = flops / nbytes if nbytes > 0 else math.inf
         mem_rate = bw / (nbytes / units) if nbytes > 0 else math.inf
         flop_rate = peak / (flops / units) if flops > 0 else math.inf
         bound = min(mem_rate, flop_rate)
         achieved = units / busy if busy > 0 else math.inf
         rows.append({
-            "kernel": k["name"], "timer": k["timer"], "unit": k["unit"], "isa": k["isa"],
+            "kernel": k["name"], "timer": k["timer"], "unit": k["unit"], "isa": isa,
             "units_per_pass": units, "passes": passes[k["per"]], "per": k["per"],
             "bytes_per_unit": nbytes / units, "flops_per_unit": flops / units,
             "arithmetic_intensity": ai, "working_set_bytes": ws,
