@@ -235,6 +235,7 @@ def counts(rep, rebuild=None):
         "list_entries": p["neighbors_per_particle"] * n,
         "touching": p["contacts_per_particle"] * n / 2 + p.get("wall_contacts", 0) / ranks,
         "cells": cells,
+        # + 1: the solve's start (residual and one preconditioning) costs about an iteration
         "cell_iterations": cells * (rep["pressure"]["iterations_avg"] + 1),
         "rebuild_particles": n * per_sub,
         "rebuild_candidates": n * per_sub * 13.5 * occupancy,
