@@ -136,8 +136,11 @@ def channel(args):
     ts = ["taskset", "-c", str(args.cpu)]
     sets = ["--set", "fluid.adaptive_dt=false", "--set", f"fluid.dt={args.dt}",
             "--set", "run.progress_interval_s=0", "--set", "output.snapshot=false"]
+    for kv in args.coloc_set:
+        sets += ["--set", kv]
     settings = (f"p_reltol={args.p_reltol:g} n_correctors={args.n_correctors} "
-                f"steps={args.steps} dt={args.dt:g} cpu={args.cpu}")
+                f"steps={args.steps} dt={args.dt:g} cpu={args.cpu}"
+                + "".join(f" coloc:{kv}" for kv in args.coloc_set))
     name = "channel" + args.tag
     rows, first = earlier_rows(args, name, settings)
     for rnd in range(first, first + args.rounds):
@@ -199,7 +202,10 @@ def channel_notes(args, cfg):
             f"{cfg['fluid']['pressure']['tol']:g} (coloc: L2 residual of the flux scale; "
             f"OpenFOAM: normalised L1 residual, {reltol_words(args)}); icoFoam PISO with "
             f"{args.n_correctors} corrector(s), GAMG (GaussSeidel), Euler, vanLeerV; coloc "
-            f"as in the case file (PCG + PFMG weighted Jacobi, AB2, TVD van Leer). "
+            + (f"as in the case file (PCG + PFMG weighted Jacobi, AB2, TVD van Leer)"
+               if not args.coloc_set else
+               f"as in the case file with {', '.join(args.coloc_set)} (PCG + PFMG, AB2, TVD van "
+               f"Leer)") + ". "
             f"Both `taskset -c {args.cpu}`.")
 
 
@@ -472,6 +478,9 @@ def main():
                         "relTol 0 always); 0.05 as icoFoam's users run it, 0 the setting of "
                         "the first comparison (every corrector to the tolerance)")
     c.add_argument("--order", default="icoFoam,coloc")
+    c.add_argument("--coloc-set", action="append", default=[], metavar="KEY=VALUE",
+                   help="one more --set for coloc (repeatable; part of the settings), e.g. "
+                        "fluid.pressure.pfmg.relax=rbgs")
     f = sp.choices["fbed"]
     f.add_argument("--case", default=os.path.join(ROOT, "bench/cases/fbed-100k.json"))
     f.add_argument("--settle-steps", type=int, default=230)
