@@ -12,10 +12,18 @@ round's start. Codes (any subset, in the order given):
   dem_bed_rounds.py --rounds 5 --nrelax 200 --nsteps 1000 \
       lammps:/tmp/bed.data coloc:main:/tmp/bench_dem_main:/tmp/bed.state \
       coloc:new:build/bench/bench_dem:/tmp/bed.state
+
+Each round also prints every code's rate over the first code's (the peer when it comes first),
+by wall and by CPU time; at the end, min / median / max over the rounds of each code's rates
+and of those ratios. --csv FILE appends each run (UTC start, round, code, rates, load) to FILE
+and takes the summary over every round in it: rounds run by separate invocations at different
+times of a session end up in one summary (the same codes in the same order each time).
 """
 import argparse
+import csv
 import os
 import re
+import statistics
 import subprocess
 import time
 
@@ -83,12 +91,20 @@ def main():
     ap.add_argument("--nrelax", type=int, default=200)
     ap.add_argument("--nsteps", type=int, default=1000)
     ap.add_argument("--zhi", type=float, default=0.06)
+    ap.add_argument("--csv", help="append the runs to this CSV; summary over all its rounds")
     ap.add_argument("codes", nargs="+")
     a = ap.parse_args()
-    for r in range(1, a.rounds + 1):
+    rows = []  # (round, label, wall, cpu)
+    if a.csv and os.path.exists(a.csv):
+        with open(a.csv, newline="") as f:
+            rows = [(int(r["round"]), r["code"], float(r["wall_M"]),
+                     float(r["cpu_M"]) if r["cpu_M"] else None) for r in csv.DictReader(f)]
+    first = 1 + max((r[0] for r in rows), default=0)
+    for r in range(first, first + a.rounds):
         load = open("/proc/loadavg").read().split()[:3]
-        print("round %d  %s  load %s" % (r, time.strftime("%H:%M:%S", time.gmtime()),
-                                         " ".join(load)), flush=True)
+        utc = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime())
+        print("round %d  %s  load %s" % (r, utc[11:], " ".join(load)), flush=True)
+        base = None
         for c in a.codes:
             f = c.split(":")
             if f[0] in ("lammps", "liggghts"):
@@ -97,8 +113,49 @@ def main():
             else:
                 w, u, extra = coloc(f[2], f[3], f[4] if len(f) > 4 else None, a)
                 label = "coloc " + f[1]
-            print("  %-14s wall %6.2f M  cpu %s  %s" % (
-                label, w, "%6.2f M" % u if u else "   n/a", extra), flush=True)
+            base = base or (label, w, u)
+            ratio = ""
+            if label != base[0]:
+                ratio = "  / %s: wall %.2fx cpu %s" % (
+                    base[0], w / base[1], "%.2fx" % (u / base[2]) if u and base[2] else "n/a")
+            print("  %-14s wall %6.2f M  cpu %s  %s%s" % (
+                label, w, "%6.2f M" % u if u else "   n/a", extra, ratio), flush=True)
+            rows.append((r, label, w, u))
+            if a.csv:
+                new = not os.path.exists(a.csv)
+                with open(a.csv, "a", newline="") as f:
+                    wr = csv.writer(f)
+                    if new:
+                        wr.writerow(["utc", "round", "code", "wall_M", "cpu_M", "load1", "extra"])
+                    wr.writerow([utc, r, label, "%.4f" % w, "%.4f" % u if u else "", load[0],
+                                 extra])
+    summary(rows)
+
+
+def summary(rows):
+    """min / median / max over the rounds of each code's rates and of its ratio to the first
+    code of its round (million particle-steps/s; ratio above 1: faster than that code)."""
+    def mmm(v):
+        return "%.2f / %.2f / %.2f" % (min(v), statistics.median(v), max(v)) if v else "n/a"
+    rounds = {}
+    for r, label, w, u in rows:
+        rounds.setdefault(r, []).append((label, w, u))
+    labels = []
+    for _, label, _, _ in rows:
+        labels += [label] if label not in labels else []
+    print("summary over %d rounds, min / median / max (M particle-steps/s; ratio to the "
+          "round's first code):" % len(rounds))
+    for lab in labels:
+        w = [x[1] for rr in rounds.values() for x in rr if x[0] == lab]
+        u = [x[2] for rr in rounds.values() for x in rr if x[0] == lab and x[2]]
+        rw = [x[1] / rr[0][1] for rr in rounds.values() for x in rr
+              if x[0] == lab and rr[0][0] != lab]
+        ru = [x[2] / rr[0][2] for rr in rounds.values() for x in rr
+              if x[0] == lab and rr[0][0] != lab and x[2] and rr[0][2]]
+        line = "  %-14s wall %s  cpu %s" % (lab, mmm(w), mmm(u))
+        if rw:
+            line += "  ratio wall %s  cpu %s" % (mmm(rw), mmm(ru))
+        print(line, flush=True)
 
 
 if __name__ == "__main__":

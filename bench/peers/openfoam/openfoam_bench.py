@@ -70,6 +70,36 @@ def uptime():
     return open("/proc/loadavg").read().split()[0]
 
 
+def now_utc():
+    return time.strftime("%Y-%m-%d %H:%M", time.gmtime())
+
+
+def earlier_rows(args, name, settings):
+    """With --append: the rows already in the result CSV (numbers back as floats) and the next
+    round's number, so that rounds run in separate invocations at different times end up in one
+    table; the CSV's settings column must match this run's (no mixing of settings in a table).
+    Without --append: no rows, round 0 (the CSV is rewritten)."""
+    path = os.path.join(args.out, f"{name}.csv")
+    if not args.append or not os.path.exists(path):
+        return [], 0
+    rows = []
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            if r.get("settings") != settings:
+                sys.exit(f"openfoam_bench: {path} holds rows with settings "
+                         f"'{r.get('settings')}', not '{settings}': use another --tag")
+            row = {}
+            for k, v in r.items():
+                try:
+                    row[k] = int(v) if k == "round" else (
+                        v if k in ("code", "utc", "settings", "load1_before", "load1_after")
+                        else float(v))
+                except ValueError:
+                    row[k] = v
+            rows.append(row)
+    return rows, 1 + max((r["round"] for r in rows), default=-1)
+
+
 def timed(cmd, log, cwd=None, env=None):
     """Run cmd with stdout/stderr to log; return (wall s, child CPU s) of this run alone."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -89,9 +119,11 @@ def timed(cmd, log, cwd=None, env=None):
 
 def channel(args):
     cfg = load_jsonc(args.case)
-    d = os.path.join(HERE, "channel")
+    d = args.dict_dir
     work = os.path.join(args.work, "channel")
-    write_channel(args.case, cfg, args.dt, args.steps + 1, args.n_correctors, d)
+    write_channel(args.case, cfg, args.dt, args.steps + 1, args.n_correctors, d, args.p_reltol)
+    if args.write_only:
+        return
     foam = os.path.join(work, "foam")
     if args.remesh or not os.path.exists(os.path.join(foam, "constant/polyMesh/owner")):
         shutil.rmtree(foam, ignore_errors=True)
@@ -104,10 +136,16 @@ def channel(args):
     ts = ["taskset", "-c", str(args.cpu)]
     sets = ["--set", "fluid.adaptive_dt=false", "--set", f"fluid.dt={args.dt}",
             "--set", "run.progress_interval_s=0", "--set", "output.snapshot=false"]
-    rows = []
-    for rnd in range(args.rounds):
+    for kv in args.coloc_set:
+        sets += ["--set", kv]
+    settings = (f"p_reltol={args.p_reltol:g} n_correctors={args.n_correctors} "
+                f"steps={args.steps} dt={args.dt:g} cpu={args.cpu}"
+                + "".join(f" coloc:{kv}" for kv in args.coloc_set))
+    name = "channel" + args.tag
+    rows, first = earlier_rows(args, name, settings)
+    for rnd in range(first, first + args.rounds):
         for who in args.order.split(","):
-            load = uptime()
+            load, utc = uptime(), now_utc()
             if who == "coloc":
                 res = {}
                 for n in (1, args.steps + 1):
@@ -141,11 +179,20 @@ def channel(args):
                        "p_solves_per_step": nc}
             row["load1_before"] = load
             row["load1_after"] = uptime()
+            row["utc"] = utc
+            row["settings"] = settings
             print("openfoam_bench:", row, flush=True)
             rows.append(row)
-    write_table(args, "channel" + args.tag, rows, "icoFoam", "coloc", "s per step",
+    write_table(args, name, rows, "icoFoam", "coloc", "s per step",
                 "wall_s_per_step",
                 "cpu_s_per_step", extra=channel_notes(args, cfg))
+
+
+def reltol_words(args):
+    if args.p_reltol > 0:
+        return (f"p relTol {args.p_reltol:g} on the first corrector(s) and pFinal relTol 0 on "
+                f"the last, as icoFoam's users run it")
+    return "relTol 0 on every corrector"
 
 
 def channel_notes(args, cfg):
@@ -153,13 +200,25 @@ def channel_notes(args, cfg):
     return (f"Grid {c[0]} x {c[1]} x {c[2]} = {c[0] * c[1] * c[2]:,} cells, fixed dt {args.dt} s "
             f"for both, {args.steps} timed steps after a first one; pressure tolerance "
             f"{cfg['fluid']['pressure']['tol']:g} (coloc: L2 residual of the flux scale; "
-            f"OpenFOAM: normalised L1 residual, relTol 0); icoFoam PISO with "
+            f"OpenFOAM: normalised L1 residual, {reltol_words(args)}); icoFoam PISO with "
             f"{args.n_correctors} corrector(s), GAMG (GaussSeidel), Euler, vanLeerV; coloc "
-            f"as in the case file (PCG + PFMG weighted Jacobi, AB2, TVD van Leer). "
+            + (f"as in the case file (PCG + PFMG weighted Jacobi, AB2, TVD van Leer)"
+               if not args.coloc_set else
+               f"as in the case file with {', '.join(args.coloc_set)} (PCG + PFMG, AB2, TVD van "
+               f"Leer)") + ". "
             f"Both `taskset -c {args.cpu}`.")
 
 
+def spread(v):
+    """min / median / max of a list, as text."""
+    return f"{min(v):.4g} / {statistics.median(v):.4g} / {max(v):.4g}"
+
+
 def write_table(args, name, rows, peer, ours, unit, wkey, ckey, extra="", more=()):
+    """The CSV (every row) and the markdown: per round both codes' wall and CPU figures, the
+    ratios peer / ours, the pressure iterations (channel), the load before each run and the
+    round's start (UTC); then min / median / max over the rounds of each ratio and of each
+    code's figure, so that a reader sees which code moved."""
     os.makedirs(args.out, exist_ok=True)
     keys = []
     for r in rows:
@@ -171,31 +230,35 @@ def write_table(args, name, rows, peer, ours, unit, wkey, ckey, extra="", more=(
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
     rounds = sorted({r["round"] for r in rows})
     by = {(r["code"], r["round"]): r for r in rows}
+    chan = name.startswith("channel")
+    head = (f"| round | start (UTC) | {peer} wall | {ours} wall | wall ratio | {peer} CPU | "
+            f"{ours} CPU | CPU ratio |")
+    if chan:
+        head += f" {peer} p its/step | {ours} p its/step |"
+    head += f" load 1 min ({peer}/{ours}) |"
     lines = [f"# coloc against OpenFOAM: {name}", "", extra, "",
-             f"| round | {peer} wall | {ours} wall | wall ratio | {peer} CPU | {ours} CPU | "
-             f"CPU ratio | {peer} p its/step | {ours} p its/step | load 1 min |"
-             if name.startswith("channel") else
-             f"| round | {peer} wall | {ours} wall | wall ratio | {peer} CPU | {ours} CPU | "
-             f"CPU ratio | load 1 min |",
-             "|---|---|---|---|---|---|---|---|---|---|" if name.startswith("channel") else
-             "|---|---|---|---|---|---|---|---|"]
-    rw, rc = [], []
+             f"Figures in {unit}; ratio = {peer} / {ours} (above 1: coloc faster).", "", head,
+             "|" + "---|" * head.count(" |")]
+    rw, rc, pw, ow, pc, oc = [], [], [], [], [], []
     for k in rounds:
         p, o = by.get((peer, k)), by.get((ours, k))
         if not p or not o:
             continue
+        pw.append(p[wkey]), ow.append(o[wkey]), pc.append(p[ckey]), oc.append(o[ckey])
         rw.append(p[wkey] / o[wkey])
         rc.append(p[ckey] / o[ckey])
-        cells = [str(k), f"{p[wkey]:.4g}", f"{o[wkey]:.4g}", f"{rw[-1]:.2f}x", f"{p[ckey]:.4g}",
-                 f"{o[ckey]:.4g}", f"{rc[-1]:.2f}x"]
-        if name.startswith("channel"):
+        cells = [str(k), str(p.get("utc", "-")), f"{p[wkey]:.4g}", f"{o[wkey]:.4g}",
+                 f"{rw[-1]:.2f}x", f"{p[ckey]:.4g}", f"{o[ckey]:.4g}", f"{rc[-1]:.2f}x"]
+        if chan:
             cells += [f"{p['p_iters_per_step']:.2f}", f"{o['p_iters_per_step']:.2f}"]
         cells.append(f"{p['load1_before']}/{o['load1_before']}")
         lines.append("| " + " | ".join(cells) + " |")
     if rw:
-        lines += ["", f"Ratio {peer} / {ours} ({unit}): wall median {statistics.median(rw):.2f}x "
-                      f"(min {min(rw):.2f}, max {max(rw):.2f}); CPU median "
-                      f"{statistics.median(rc):.2f}x (min {min(rc):.2f}, max {max(rc):.2f})."]
+        lines += ["", f"Over {len(rw)} rounds, min / median / max:", "",
+                  "| | wall | CPU |", "|---|---|---|",
+                  f"| ratio {peer} / {ours} | {spread(rw)} | {spread(rc)} |",
+                  f"| {peer} ({unit}) | {spread(pw)} | {spread(pc)} |",
+                  f"| {ours} ({unit}) | {spread(ow)} | {spread(oc)} |"]
     lines += list(more)
     with open(os.path.join(args.out, f"{name}.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -237,6 +300,11 @@ def fbed(args):
     cfg = load_jsonc(args.case)
     name = cfg["name"]
     work = os.path.join(args.work, "fbed")
+    if args.write_only:  # the dictionaries alone (the radius of the case's first source)
+        write_fbed(args.case, cfg, args.dict_dir, args.foam_dt or cfg["fluid"]["dt"],
+                   args.foam_steps + 2, cfg["particles"]["sources"][0]["radius"], args.alpha,
+                   args.collision_steps, args.drag, args.n_correctors, args.p_reltol)
+        return
     os.makedirs(work, exist_ok=True)
     ckdir = os.path.join(work, "contact")
     ck = os.path.join(ckdir, "settled.h5")
@@ -254,14 +322,14 @@ def fbed(args):
     cn0 = contacts_per_particle(p, radius)
     fl_dt, pa_dt = cfg["fluid"]["dt"], cfg["particles"]["dt"]
     sub = round(fl_dt / pa_dt)
-    d = os.path.join(HERE, "fbed")
+    d = args.dict_dir
     # DPMFoam's time step: coloc's fluid step by default (DPMFoam then sub-cycles its collisions
     # by its own estimate from the fastest particle, 16 sub-cycles of 2.5e-5 s here); one step
     # more at each end: the first injects, the last writes the positions
     foam_dt = args.foam_dt or fl_dt
     steps = args.foam_steps + 2
     write_fbed(args.case, cfg, d, foam_dt, steps, radius, args.alpha, args.collision_steps,
-               args.drag)
+               args.drag, args.n_correctors, args.p_reltol)
     foam = os.path.join(work, "foam")
     if args.remesh or not os.path.exists(os.path.join(foam, "constant/polyMesh/owner")):
         shutil.rmtree(foam, ignore_errors=True)
@@ -283,10 +351,15 @@ def fbed(args):
     if args.particles and args.particles < n_all:
         sys.exit("openfoam_bench: --particles below the case's count: coloc would need a case "
                  "with that many particles (not written by this script)")
-    rows = []
-    for rnd in range(args.rounds):
+    settings = (f"p_reltol={args.p_reltol:g} n_correctors={args.n_correctors} "
+                f"foam_dt={foam_dt:g} foam_steps={args.foam_steps} coloc_steps={args.coloc_steps} "
+                f"drag={args.drag} alpha={args.alpha:g} collision_steps={args.collision_steps} "
+                f"cpu={args.cpu}")
+    name = "fbed" + args.tag
+    rows, first = earlier_rows(args, name, settings)
+    for rnd in range(first, first + args.rounds):
         for who in args.order.split(","):
-            load = uptime()
+            load, utc = uptime(), now_utc()
             if who == "coloc":
                 out = os.path.join(work, f"coloc-r{rnd}")
                 wall, cpu = timed(ts + [args.coloc, "run", args.case, "--quiet", "--out", out,
@@ -342,6 +415,8 @@ def fbed(args):
                        "process_wall_s": wall, "process_cpu_s": cpu_all}
             row["load1_before"] = load
             row["load1_after"] = uptime()
+            row["utc"] = utc
+            row["settings"] = settings
             print("openfoam_bench:", row, flush=True)
             rows.append(row)
     notes = (f"{name}: {cfg['domain']['cells']} cells, {n_all:,} particles from coloc's settled "
@@ -349,7 +424,10 @@ def fbed(args):
              f"{cn0:.2f}), fluid dt {fl_dt:g} s, coloc {sub} DEM sub-steps a fluid step; "
              f"DPMFoam deltaT {foam_dt:g} s, its own collision sub-cycles; "
              f"DPMFoam {args.drag}, pairSpringSliderDashpot (alpha {args.alpha:g}, b 1.5, "
-             f"collisionResolutionSteps {args.collision_steps}), {args.foam_steps} timed steps "
+             f"collisionResolutionSteps {args.collision_steps}), PIMPLE with "
+             f"{args.n_correctors} corrector(s), "
+             f"{'p relTol %g / pFinal relTol 0 (the Goldschmidt tutorial)' % args.p_reltol if args.p_reltol > 0 else 'relTol 0 on every corrector'}, "
+             f"{args.foam_steps} timed steps "
              f"after the injection step; coloc {args.coloc_steps} steps restarted from the "
              f"checkpoint. Per particle-substep: the whole coupled step / (particles x "
              f"sub-steps). Both `taskset -c {args.cpu}`.")
@@ -363,7 +441,7 @@ def fbed(args):
             more.append(f"| {k} | {a['substeps']:.3g} | {a['contacts_per_particle']:.2f} | "
                         f"{b['contacts_per_particle']:.2f} | {a['wall_s_per_step']:.4g} | "
                         f"{b['wall_s_per_step']:.4g} |")
-    write_table(args, "fbed" + args.tag, rows, "DPMFoam", "coloc", "ns per particle-substep",
+    write_table(args, name, rows, "DPMFoam", "coloc", "ns per particle-substep",
                 "wall_ns_per_particle_substep", "cpu_ns_per_particle_substep", extra=notes,
                 more=more)
 
@@ -381,12 +459,28 @@ def main():
         s.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "openfoam"))
         s.add_argument("--remesh", action="store_true")
         s.add_argument("--tag", default="", help="appended to the result file names")
+        s.add_argument("--dict-dir", default=os.path.join(HERE, what),
+                       help="where the OpenFOAM dictionaries are written (default: the "
+                            "committed bench/peers/openfoam/<case>/)")
+        s.add_argument("--write-only", action="store_true",
+                       help="write the dictionaries into --dict-dir and stop (no run)")
+        s.add_argument("--append", action="store_true",
+                       help="add this invocation's rounds to the result CSV (same settings "
+                            "only) and rewrite the markdown from all of them: rounds spread "
+                            "over a session by running the script several times")
     c = sp.choices["channel"]
     c.add_argument("--case", default=os.path.join(ROOT, "bench/cases/fluid-channel.json"))
     c.add_argument("--steps", type=int, default=20, help="timed steps after a first one")
     c.add_argument("--dt", type=float, default=0.015)
     c.add_argument("--n-correctors", type=int, default=2, help="icoFoam PISO correctors")
+    c.add_argument("--p-reltol", type=float, default=0.05,
+                   help="GAMG relTol of p on the PISO correctors before the last (pFinal: "
+                        "relTol 0 always); 0.05 as icoFoam's users run it, 0 the setting of "
+                        "the first comparison (every corrector to the tolerance)")
     c.add_argument("--order", default="icoFoam,coloc")
+    c.add_argument("--coloc-set", action="append", default=[], metavar="KEY=VALUE",
+                   help="one more --set for coloc (repeatable; part of the settings), e.g. "
+                        "fluid.pressure.pfmg.relax=rbgs")
     f = sp.choices["fbed"]
     f.add_argument("--case", default=os.path.join(ROOT, "bench/cases/fbed-100k.json"))
     f.add_argument("--settle-steps", type=int, default=230)
@@ -399,6 +493,12 @@ def main():
     f.add_argument("--collision-steps", type=int, default=12)
     f.add_argument("--drag", default="WenYuDrag")
     f.add_argument("--order", default="DPMFoam,coloc")
+    f.add_argument("--n-correctors", type=int, default=2,
+                   help="DPMFoam PIMPLE (PISO) correctors: 2 as in its Goldschmidt tutorial")
+    f.add_argument("--p-reltol", type=float, default=0.01,
+                   help="GAMG relTol of p before the last corrector (pFinal: 0); 0.01 as in the "
+                        "Goldschmidt tutorial; --p-reltol 0 --n-correctors 1 is the setting of "
+                        "the first comparison")
     args = ap.parse_args()
     args.case = os.path.abspath(args.case)
     args.coloc = os.path.abspath(args.coloc)
