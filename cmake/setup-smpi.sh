@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # cmake/setup-smpi.sh [BUILD_DIR] [extra cmake args...] — the SimGrid SMPI build of coloc
 # (docs/smpi.md): installs SimGrid (Debian: libsimgrid-dev) when missing, builds hypre
-# from Debian's own source package with smpicc once (BUILD_DIR/hypre, ~3 minutes on 2 cores),
+# from Debian's own source package with smpicc once (BUILD_DIR/hypre, ~3 minutes on 2 cores;
+# one patch for the simulation, cmake/hypre-smpi-exchange.patch),
 # then configures and builds coloc with -DCOLOC_SMPI=ON in BUILD_DIR (default: build-smpi).
 # Run it after cmake/setup.sh (which installs the other dependencies). Idempotent.
 set -euo pipefail
@@ -27,9 +28,13 @@ fi
 
 # hypre with smpicc: the version of Debian's libhypre-dev (the Open MPI build's), from Debian's
 # source package, through a private deb-src list (the system's lists are not touched).
+# One change to hypre's sources for the simulation (cmake/hypre-smpi-exchange.patch: its assumed-
+# partition exchange probes instead of testing, see the patch's header); a new patch rebuilds it.
 hypre=$build/hypre
 lib=$hypre/install/lib/libHYPRE.a
-if [[ ! -f $lib ]]; then
+patch_file=$root/cmake/hypre-smpi-exchange.patch
+stamp=$(sha256sum "$patch_file" | cut -c1-16)
+if [[ ! -f $lib || $(cat "$hypre/patch.stamp" 2>/dev/null) != "$stamp" ]]; then
   version=$(dpkg-query -W -f='${Version}' libhypre-dev 2>/dev/null || true)
   echo "coloc setup-smpi: building hypre ${version:-?} with smpicc in $hypre"
   rm -rf "$hypre" && mkdir -p "$hypre/apt/lists/partial" "$hypre/src"
@@ -55,6 +60,7 @@ X
   fi
   tar xzf "$hypre"/src/hypre_*.orig.tar.gz -C "$hypre/src"
   cd "$hypre"/src/hypre-*/src
+  git apply "$patch_file"  # git apply works outside a repository
   # SMPI_PRETEND_CC: autoconf's test programs must run as ordinary programs while configuring.
   # -O2 as Debian builds its libhypre (the Open MPI build's), so simulated bursts cost the same.
   SMPI_PRETEND_CC=1 ./configure CC=smpicc CXX=smpicxx CFLAGS=-O2 CXXFLAGS=-O2 \
@@ -62,6 +68,7 @@ X
     { tail -20 "$hypre/configure.log"; exit 1; }
   make -j "$(nproc)" >"$hypre/make.log" 2>&1 || { tail -20 "$hypre/make.log"; exit 1; }
   make install >>"$hypre/make.log" 2>&1
+  echo "$stamp" >"$hypre/patch.stamp"
   cd "$root"
 fi
 
