@@ -30,4 +30,29 @@ void massFluxes(const FaceField& u, const CellField& eps, FaceField& M);
 void explicitTerms(int d, const FaceField& u, const FaceField& M, const CellField& eps,
                    const MomentumParams& prm, const IndexBox& box, Field3<double>& H);
 
+/// The predictor's inputs on the faces `box` of component c (step.cpp, predictVelocity()).
+struct PredictFaces {
+  int c = 0;
+  IndexBox box;
+  const CellField *eps = nullptr, *epsOld = nullptr, *K = nullptr, *KUp = nullptr;
+  const Field3<double>*Hn = nullptr, *Ho = nullptr;  // H at n and n - 1 (layout of U)
+  double ca = 1, cb = 0;                             // E = ca Hn + cb Ho
+  double idt = 0, g = 0;                             // 1 / dt, gravity along c
+};
+/// On the faces of p.box, with the face means eps_f = (eps(c - e_c) + eps(c)) / 2 (and of
+/// eps_old, K, KUp): P = U, then U = (eps_old_f U / dt + E + eps_f g + KUp_f) / (eps_f / dt + K_f).
+void predictFaces(const PredictFaces& p, Field3<double>& U, Field3<double>& P);
+
+/// The instruction sets explicitTerms() and predictFaces() are compiled for (momentum_kernels.hpp):
+/// Widest is the widest one the CPU runs, what they call. All give the same bits.
+enum class MomentumIsa { Widest, Build, Avx2, Avx512 };
+/// explicitTerms() on the given instruction set (tests compare them); false (and nothing
+/// computed) where the CPU lacks the instructions.
+bool explicitTermsOn(MomentumIsa isa, int d, const FaceField& u, const FaceField& M,
+                     const CellField& eps, const MomentumParams& prm, const IndexBox& box,
+                     Field3<double>& H);
+/// predictFaces() on the given instruction set; false (and nothing computed) where the CPU lacks
+/// the instructions.
+bool predictFacesOn(MomentumIsa isa, const PredictFaces& p, Field3<double>& U, Field3<double>& P);
+
 }  // namespace coloc::fv

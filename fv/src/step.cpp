@@ -201,34 +201,15 @@ void FluidSolver::Impl::predictVelocity(double dt) {
     const double idt = 1.0 / dt;
     for (int c = 0; c < 3; ++c) explicitTerms(c, f.u, M, f.epsOld, mom, interiorFaces(c), Hn[c]);
     for (int c = 0; c < 3; ++c) {
-      const IndexBox box = interiorFaces(c);
       auto& U = f.u[c];
       auto& P = uPrev[c];
-      const std::ptrdiff_t cs = strideOf(f.eps, c);
-      const double* en = f.eps.data().data();
-      const double* eo = f.epsOld.data().data();
-      const double* kk = f.K.data().data();
-      const double* kup = f.KUp[c].data().data();
-      double* up = U.data().data();
-      double* pp = P.data().data();
-      const double* hn = Hn[c].data().data();
-      const double* ho = Ho[c].data().data();
-      const double gc = prm.g[c];
-      for (int k = box.lo[2]; k < box.hi[2]; ++k)
-        for (int j = box.lo[1]; j < box.hi[1]; ++j) {
-          const std::ptrdiff_t q0 = U.index(box.lo[0], j, k), c0 = f.eps.index(box.lo[0], j, k),
-                               h0 = Hn[c].index(box.lo[0], j, k);
-          for (int i = 0; i < box.hi[0] - box.lo[0]; ++i) {
-            const std::ptrdiff_t q = q0 + i, cc = c0 + i, hh = h0 + i;
-            const double efn = 0.5 * (en[cc - cs] + en[cc]);
-            const double efo = 0.5 * (eo[cc - cs] + eo[cc]);
-            const double kf = 0.5 * (kk[cc - cs] + kk[cc]);
-            const double kupf = 0.5 * (kup[cc - cs] + kup[cc]);
-            const double E = ca * hn[hh] + cb * ho[hh];
-            pp[q] = up[q];
-            up[q] = (efo * up[q] * idt + E + efn * gc + kupf) / (efn * idt + kf);
-          }
-        }
+      PredictFaces pf;
+      pf.c = c;
+      pf.box = interiorFaces(c);
+      pf.eps = &f.eps, pf.epsOld = &f.epsOld, pf.K = &f.K, pf.KUp = &f.KUp[c];
+      pf.Hn = &Hn[c], pf.Ho = &Ho[c];
+      pf.ca = ca, pf.cb = cb, pf.idt = idt, pf.g = prm.g[c];
+      predictFaces(pf, U, P);
       predictBoxFaces(dec, bc, c, U, P);
     }
     std::swap(Hn, Ho);
