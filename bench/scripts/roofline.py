@@ -104,9 +104,10 @@ KERNELS = [
     },
     {
         "name": "fluid_momentum", "timer": "fluid_momentum", "per": "step",
-        "unit": "cell", "primary": "cells", "isa": "sse2",
-        "where": "fv/src/momentum.cpp massFluxes, kernel<VanLeer> (explicitTerms); "
-                 "fv/src/step.cpp predictVelocity",
+        "unit": "cell", "primary": "cells", "isa": "avx512",
+        "where": "fv/src/momentum.cpp massFluxes; fv/src/momentum_kernels.hpp kernel<VanLeer> "
+                 "(explicitTerms) and predict (predictFaces, from step.cpp predictVelocity), "
+                 "dispatched to the widest of SSE2 / AVX2 / AVX-512 the CPU runs",
         "terms": [
             T("cells", 480, 444,
               "mass fluxes 3 x (eps, u R, M W) 72 B 9 flops; explicit terms 3 x (u_d, M_d, "
