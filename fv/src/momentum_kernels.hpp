@@ -1,11 +1,14 @@
-// fv/src/momentum_kernels.hpp — the explicit momentum terms (explicitTerms(), momentum.hpp)
-// compiled once per instruction set, as the coupling's drag packs (coupling/src/drag_packs.hpp):
-// momentum.cpp for the build's target (SSE2 in the portable x86-64 build), momentum_avx2.cpp with
-// -mavx2, momentum_avx512.cpp with -mavx512f, all without FMA contraction (fv/CMakeLists.txt), so
-// that every variant does the same IEEE operations per face in the same order and the results are
-// bitwise those of the build's code. explicitTerms() calls the widest one the CPU runs.
-// Everything here has internal linkage (no inline function of one instruction set can stand in
-// for another's at link time).
+// fv/src/momentum_kernels.hpp — the explicit momentum terms (explicitTerms()) and the predictor's
+// update (predictFaces(), momentum.hpp) compiled once per instruction set, as the coupling's drag
+// packs (coupling/src/drag_packs.hpp): momentum.cpp for the build's target (SSE2 in the portable
+// x86-64 build), momentum_avx2.cpp with -mavx2, momentum_avx512.cpp with -mavx512f, all without
+// FMA contraction and with -fno-trapping-math (fv/CMakeLists.txt), so that every variant does the
+// same IEEE operations per face in the same order and the results are bitwise those of the
+// scalar code (test_fv_momentum_isa). The row loops are written for the vectoriser: contiguous
+// along x, the two transverse directions spelled out (no arrays of pointers), the limiter as
+// selections, the fields' arrays restrict. explicitTerms() and predictFaces() call the widest
+// variant the CPU runs. Everything here has internal linkage (no inline function of one
+// instruction set can stand in for another's at link time).
 #pragma once
 
 #include <cmath>
@@ -66,13 +69,13 @@ inline double faceValue(double m, double a, double b, double c, double d) {
 
 /// One transverse axis e of component d: strides and the arrays of component e.
 struct Across {
-  const double* m;      // M_e
-  const double* w;      // u_e
-  std::ptrdiff_t s;     // along e, layout of component d
-  std::ptrdiff_t see;   // along e, layout of component e
-  std::ptrdiff_t sde;   // along d, layout of component e
-  std::ptrdiff_t cs;    // along e, cell layout
-  double ihe;           // 1 / h_e
+  const double* m;     // M_e
+  const double* w;     // u_e
+  std::ptrdiff_t s;    // along e, layout of component d
+  std::ptrdiff_t see;  // along e, layout of component e
+  std::ptrdiff_t sde;  // along d, layout of component e
+  std::ptrdiff_t cs;   // along e, cell layout
+  double ihe;          // 1 / h_e
 };
 
 /// The convective and viscous contributions across e of face q (cell c, face qe of component e),
@@ -93,8 +96,7 @@ inline void across(const Across& T, const double* ud, const double* ec, std::ptr
   const double eHi = 0.25 * (ec[c + cs] + ec[c + cs - cd] + ec[c] + ec[c - cd]);
   const double tLo = nu * eLo * ((ud[q] - ud[q - s]) * T.ihe + (T.w[qe] - T.w[qe - T.sde]) * ihd);
   const double tHi =
-      nu * eHi *
-      ((ud[q + s] - ud[q]) * T.ihe + (T.w[qe + T.see] - T.w[qe + T.see - T.sde]) * ihd);
+      nu * eHi * ((ud[q + s] - ud[q]) * T.ihe + (T.w[qe + T.see] - T.w[qe + T.see - T.sde]) * ihd);
   visc += (tHi - tLo) * T.ihe;
 }
 
@@ -132,12 +134,12 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
   const double* md = M[d].data().data();
   const double* ec = eps.data().data();
   double* hp = H.data().data();
-  const std::ptrdiff_t sd = strideIn(Ud, d);   // along d in the layout of component d
-  const std::ptrdiff_t cd = strideIn(eps, d);  // along d in the cell layout
+  const std::ptrdiff_t sd = strideIn(Ud, d);           // along d in the layout of component d
+  const std::ptrdiff_t cd = strideIn(eps, d);          // along d in the cell layout
   const int ea = d == 0 ? 1 : 0, eb = d == 2 ? 1 : 2;  // the transverse axes, ascending
   const auto acrossOf = [&](int e) {
     return Across{M[e].data().data(), u[e].data().data(), strideIn(Ud, e), strideIn(u[e], e),
-                  strideIn(u[e], d), strideIn(eps, e), 1.0 / prm.h[e]};
+                  strideIn(u[e], d),  strideIn(eps, e),   1.0 / prm.h[e]};
   };
   const Across A = acrossOf(ea), B = acrossOf(eb);
   const double ihd = 1.0 / prm.h[d];
@@ -145,8 +147,8 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
   for (int k = box.lo[2]; k < box.hi[2]; ++k)
     for (int j = box.lo[1]; j < box.hi[1]; ++j)
       row<C>(ni, hp + H.index(box.lo[0], j, k), ud, md, ec, Ud.index(box.lo[0], j, k),
-             eps.index(box.lo[0], j, k), u[ea].index(box.lo[0], j, k),
-             u[eb].index(box.lo[0], j, k), sd, cd, nu, ihd, A, B);
+             eps.index(box.lo[0], j, k), u[ea].index(box.lo[0], j, k), u[eb].index(box.lo[0], j, k),
+             sd, cd, nu, ihd, A, B);
 }
 
 /// The predictor on one row of n faces (predictFaces(), momentum.hpp).
@@ -176,32 +178,33 @@ inline void predict(const PredictFaces& p, Field3<double>& U, Field3<double>& P)
   const int ni = box.hi[0] - box.lo[0];
   for (int k = box.lo[2]; k < box.hi[2]; ++k)
     for (int j = box.lo[1]; j < box.hi[1]; ++j)
-      predictRow(ni, U.data().data(), P.data().data(), eps.data().data(),
-                 p.epsOld->data().data(), p.K->data().data(), p.KUp->data().data(),
-                 p.Hn->data().data(), p.Ho->data().data(), U.index(box.lo[0], j, k),
-                 eps.index(box.lo[0], j, k), p.Hn->index(box.lo[0], j, k), cs, p.ca, p.cb,
-                 p.idt, p.g);
+      predictRow(ni, U.data().data(), P.data().data(), eps.data().data(), p.epsOld->data().data(),
+                 p.K->data().data(), p.KUp->data().data(), p.Hn->data().data(), p.Ho->data().data(),
+                 U.index(box.lo[0], j, k), eps.index(box.lo[0], j, k), p.Hn->index(box.lo[0], j, k),
+                 cs, p.ca, p.cb, p.idt, p.g);
 }
 
 }  // namespace
 
 // The functions `terms` and `pred` for one instruction set: explicitTerms() for the scheme
 // prm.convection, and predictFaces().
-#define COLOC_MOMENTUM_DEFINE(terms, pred)                                                   \
-  void pred(const PredictFaces& p, Field3<double>& U, Field3<double>& P) { predict(p, U, P); } \
-  void terms(int d, const FaceField& u, const FaceField& M, const CellField& eps,             \
-            const MomentumParams& prm, const IndexBox& box, Field3<double>& H) {             \
-    switch (prm.convection) {                                                                \
-      case Convection::Central:                                                              \
-        kernel<Convection::Central>(d, u, M, eps, prm, box, H);                              \
-        break;                                                                               \
-      case Convection::VanLeer:                                                              \
-        kernel<Convection::VanLeer>(d, u, M, eps, prm, box, H);                              \
-        break;                                                                               \
-      case Convection::Minmod:                                                               \
-        kernel<Convection::Minmod>(d, u, M, eps, prm, box, H);                               \
-        break;                                                                               \
-    }                                                                                        \
+#define COLOC_MOMENTUM_DEFINE(terms, pred)                                        \
+  void pred(const PredictFaces& p, Field3<double>& U, Field3<double>& P) {        \
+    predict(p, U, P);                                                             \
+  }                                                                               \
+  void terms(int d, const FaceField& u, const FaceField& M, const CellField& eps, \
+             const MomentumParams& prm, const IndexBox& box, Field3<double>& H) { \
+    switch (prm.convection) {                                                     \
+      case Convection::Central:                                                   \
+        kernel<Convection::Central>(d, u, M, eps, prm, box, H);                   \
+        break;                                                                    \
+      case Convection::VanLeer:                                                   \
+        kernel<Convection::VanLeer>(d, u, M, eps, prm, box, H);                   \
+        break;                                                                    \
+      case Convection::Minmod:                                                    \
+        kernel<Convection::Minmod>(d, u, M, eps, prm, box, H);                    \
+        break;                                                                    \
+    }                                                                             \
   }
 
 }  // namespace coloc::fv

@@ -136,7 +136,9 @@ void fillRandom(Field3<double>& f, std::mt19937_64& rng, double lo, double hi) {
   }
 }
 
-bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool sameBits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 }  // namespace
 
@@ -170,8 +172,8 @@ TEST(MomentumIsa, EveryVariantMatchesTheScalarKernelBitwise) {
       box.hi[d] += 1;  // the faces of component d, the block's high face included
       Field3<double> want(u[d].layout(), -7.0);
       referenceTerms(d, u, M, eps, prm, box, want);
-      for (auto isa : {MomentumIsa::Widest, MomentumIsa::Build, MomentumIsa::Avx2,
-                       MomentumIsa::Avx512}) {
+      for (auto isa :
+           {MomentumIsa::Widest, MomentumIsa::Build, MomentumIsa::Avx2, MomentumIsa::Avx512}) {
         Field3<double> got(u[d].layout(), -7.0);
         if (!explicitTermsOn(isa, d, u, M, eps, prm, box, got)) continue;
         ++variants;
