@@ -26,11 +26,12 @@ The settings, and why:
                        detached completes when its receive has matched (the receives of coloc's and
                        hypre's exchanges are posted first, so that is at once), in the sending
                        rank's own short list (SimGrid 3.34 replaced the lists by sets).
-  smpi/coll-selector   the collective algorithms of the MPI library the platform's users run:
-                       impi (Intel MPI's choices) on the paper's cluster (its runs used Intel MPI
-                       5.1), ompi (Open MPI's) on the current one and on other XML files; --coll
-                       overrides. SMPI's own default is a naive set (its source says it is not to
-                       be trusted for performance): MPI_Allreduce is a linear reduce to rank 0 then
+  smpi/coll-selector ompi   the collective algorithms of a real MPI library (Open MPI's choices
+                       by message and communicator size); --coll overrides. The paper's runs used
+                       Intel MPI 5.1, but SMPI's impi selector crashes (segmentation fault) in
+                       the balanced strategy's set-up at 64 ranks, and its mpich selector aborts
+                       (mismatched datatypes). SMPI's own default is a naive set (its source says
+                       it is not to be trusted for performance): MPI_Allreduce is a linear reduce to rank 0 then
                        a broadcast, MPI_Allgather P-1 sends a rank, MPI_Barrier linear. That
                        charges the root P-1 serialised messages per reduction and costs the
                        simulator O(P^2) per collective (the root's wait for P-1 requests is P-1
@@ -48,7 +49,6 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PLATFORMS = os.path.join(ROOT, "bench", "platforms")
-COLLECTIVES = {"paper": "impi", "current": "ompi"}  # by platform name; anything else: ompi
 SETTINGS = ["--cfg=smpi/host-speed:1Gf", "--cfg=smpi/bw-factor:0:1", "--cfg=smpi/lat-factor:0:1",
             "--cfg=smpi/iprobe:1e-7", "--cfg=smpi/test:1e-7", "--cfg=smpi/send-is-detached-thresh:0"]
 
@@ -93,8 +93,8 @@ def main():
     ap.add_argument("--smpi-build", default=os.path.join(ROOT, "build-smpi"),
                     help="the SMPI build folder (cmake/setup-smpi.sh)")
     ap.add_argument("--exe", help="another program of the SMPI build (e.g. a test) instead of coloc")
-    ap.add_argument("--coll", help="SMPI collective selector (impi, ompi, mpich, mvapich2, default); "
-                    "default: the platform's (paper: impi, current: ompi)")
+    ap.add_argument("--coll", default="ompi",
+                    help="SMPI collective selector (ompi, impi, mpich, mvapich2, default); default: ompi")
     ap.add_argument("--cfg", action="append", default=[],
                     help="extra SimGrid setting, e.g. --cfg smpi/privatization:no")
     ap.add_argument("coloc_args", nargs=argparse.REMAINDER, help="-- then coloc's arguments")
@@ -106,13 +106,12 @@ def main():
     if not shutil.which("smpirun"):
         sys.exit("smpi_run.py: smpirun not found (cmake/setup-smpi.sh installs SimGrid)")
     platform = platform_file(a.platform)
-    coll = a.coll or COLLECTIVES.get(a.platform, "ompi")
     with tempfile.TemporaryDirectory(prefix="coloc-smpi-") as tmp:
         hosts = os.path.join(tmp, "hosts.txt")
         write_hostfile(hosts, platform, a.ranks)
         cmd = (["smpirun", "-np", str(a.ranks), "-platform", platform, "-hostfile", hosts,
                 "--cfg=smpi/tmpdir:" + tmp, "--log=root.thres:warning"] + SETTINGS +
-               ["--cfg=smpi/coll-selector:" + coll] + ["--cfg=" + c for c in a.cfg] + [exe] + args)
+               ["--cfg=smpi/coll-selector:" + a.coll] + ["--cfg=" + c for c in a.cfg] + [exe] + args)
         t0 = time.monotonic()
         # SimGrid reports a deadlock of the simulated ranks on stderr and smpirun still exits 0:
         # stderr is passed through and watched, and a deadlock is a failure.
