@@ -101,12 +101,17 @@ class Comm {
   T min(T v) const {
     return allreduce(v, MPI_MIN);
   }
+  // An empty span reduces nothing and calls no collective (every rank passes the same length,
+  // so every rank skips it): SimGrid 3.32's Open MPI collectives divide by the count and raise
+  // SIGFPE on a zero-count allreduce (a fluid-only run's empty series row did).
   template <class T>
   void sumInPlace(std::span<T> v) const {
+    if (v.empty()) return;
     MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), mpiType<T>(), MPI_SUM, comm_);
   }
   template <class T>
   void maxInPlace(std::span<T> v) const {
+    if (v.empty()) return;
     MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), mpiType<T>(), MPI_MAX, comm_);
   }
   MinMaxAvg minMaxAvg(double v) const;
