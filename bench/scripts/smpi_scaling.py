@@ -18,9 +18,15 @@ noise): R.json is a 1-rank report.json of the real build (calibrated here) or a 
 `coloc plan` of the real build (--coloc). The platform's links give the model's network: latency
 two links (node, switch, node), bandwidth one link shared by the ranks of a node. The CSV gets
 model_step_s, model_error (model / simulated - 1) and the model's shares; the figure draws the
-model dashed. The paper's figures are drawn where it gives them (case 2 at 252 cores: 81 %
+model dashed. `dem_s_simulated` and `pressure_s_simulated` are the simulated DEM phases and
+hypre's set-up and solve a step (rank averages); `model_dem_s` and `model_error_dem` compare the
+model's DEM alone, since SMPI over-charges hypre's many small bursts (docs/smpi.md). The paper's figures are drawn where it gives them (case 2 at 252 cores: 81 %
 fluid, 18 % DummyDEM, < 1 % inter-physics; case 3: > 92 % DEM, < 8 % fluid, < 0.1 %
 inter-physics; independent partitions after SediFoam: ~30 % inter-physics above 200 ranks).
+
+--resume: a point whose run folder already holds a report.json of the same --steps and the
+simulation's log (DIR/STRATEGY-npP.smpi.log, written after a run that ended well) is read instead
+of simulated again, so a sweep that was stopped goes on where it stopped.
 
 --plot-only CSV [--png PNG]: the figure again from a CSV this script wrote (bench/results/smpi/).
 The figure is stamped with the simulated runs' provenance (bench/scripts/provenance.py; the CSV's
@@ -108,13 +114,29 @@ def run_one(a, strategy, ranks, folder):
             "--set", f"partition.strategy={strategy}", "--out", folder]
     for kv in case_sets(a):
         cmd += ["--set", kv]
-    out = subprocess.run(cmd, capture_output=True, text=True)
-    sys.stdout.write(out.stdout)
-    sys.stderr.write(out.stderr)
-    m = re.search(r"wall ([0-9.]+) s, peak memory ([0-9.]+) MiB, exit (\d+)", out.stdout)
-    if out.returncode != 0 or not m:
-        sys.exit(f"smpi_scaling.py: {strategy} at {ranks} ranks failed (exit {out.returncode})")
-    rep = json.load(open(os.path.join(folder, "report.json")))
+    log = folder + ".smpi.log"  # smpi_run.py's output: the simulation's wall time and memory
+    rep_path = os.path.join(folder, "report.json")
+    kept = a.resume and os.path.exists(log) and os.path.exists(rep_path)
+    if kept:
+        text, rc = open(log).read(), 0
+        print(f"smpi_scaling.py: {strategy} at {ranks} ranks: kept from {log} (--resume)")
+    else:
+        out = subprocess.run(cmd, capture_output=True, text=True)
+        sys.stdout.write(out.stdout)
+        sys.stderr.write(out.stderr)
+        text, rc = out.stdout, out.returncode
+        if os.path.exists(log):
+            os.remove(log)
+    m = re.search(r"wall ([0-9.]+) s, peak memory ([0-9.]+) MiB, exit (\d+)", text)
+    if rc != 0 or not m:
+        sys.exit(f"smpi_scaling.py: {strategy} at {ranks} ranks failed (exit {rc})")
+    rep = json.load(open(rep_path))
+    if rep.get("run", {}).get("steps") != a.steps:
+        sys.exit(f"smpi_scaling.py: {rep_path} ran {rep.get('run', {}).get('steps')} steps, "
+                 f"not --steps {a.steps}: run without --resume")
+    if not kept:
+        with open(log, "w") as f:
+            f.write(text)
     REPORTS.append(rep)
     if not rep.get("provenance", {}).get("simulated", False):
         sys.exit(f"smpi_scaling.py: {folder}/report.json is not from a simulated run")
@@ -123,6 +145,12 @@ def run_one(a, strategy, ranks, folder):
            "simulation_wall_s": float(m.group(1)), "simulation_peak_mib": float(m.group(2))}
     for k in SHARES:
         row["share_" + k] = rep["fractions"].get(k, 0.0)
+    steps = rep["run"]["steps"]
+    t = rep.get("timers", {})
+    row["dem_s_simulated"] = sum(v.get("avg", 0.0) for k, v in t.items()
+                                 if k.startswith("dem_")) / steps
+    row["pressure_s_simulated"] = sum(t.get(k, {}).get("avg", 0.0) for k in (
+        "fluid_pressure_assemble", "fluid_pressure_solve")) / steps
     row["particles"] = rep.get("bed", {}).get("particles", "")
     row["contacts_per_particle"] = rep.get("bed", {}).get("contacts_per_particle", "")
     return row
@@ -141,6 +169,9 @@ def main():
                     metavar="OVERLAP", help="the bed starts dense and in contact (dense_bed.py; "
                     "neighbours overlap by OVERLAP of a diameter, default 0.01)")
     ap.add_argument("--smpi-build", help="the SMPI build folder (default: smpi_run.py's)")
+    ap.add_argument("--resume", action="store_true", help="keep the points of an earlier run "
+                    "of this command into the same --out (their report.json and .smpi.log): a "
+                    "long sweep goes on where it stopped")
     ap.add_argument("--out", help="output folder (default: ./out/<case>-smpi-scaling)")
     ap.add_argument("--model", help="a 1-rank report.json of the real build, or a costs JSON: "
                     "model.py's prediction beside each point")
@@ -177,6 +208,11 @@ def main():
         r["model_step_s"] = m["step_s"]
         r["model_error"] = m["step_s"] / r["step_s_simulated"] - 1.0
         r["model_speedup"] = m0["step_s"] / m["step_s"] * first["ranks"]
+        # the DEM alone (rank average, ghosts included): the part of the step whose simulated
+        # bursts are the code's own work; hypre's are over-charged by SMPI (docs/smpi.md)
+        r["model_dem_s"] = m["step_s"] * m["dem"]
+        if r["dem_s_simulated"] > 0:
+            r["model_error_dem"] = r["model_dem_s"] / r["dem_s_simulated"] - 1.0
         for k, mk in (("fv", "fluid"), ("dem", "dem"), ("coupling", "coupling"),
                       ("inter_physics", "inter_physics"), ("wait", "wait")):
             r["model_share_" + k] = m[mk]
