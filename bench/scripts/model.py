@@ -40,6 +40,10 @@ Noise (bench_noise, --noise): the same work runs unevenly on the cores of a real
   it is waited for at a barrier (wait). Beyond the measured ranks eta grows as the expected
   maximum of P independent draws of the measured relative times (extrapolated). No noise unless
   measured: the cluster profiles assume dedicated, quiet cores.
+Independent strategy: the handover of particle rows inside a rank (force_handover bytes) at
+  memory speed, unless the calibration is a 1-rank run of that strategy: then its exchange_local
+  time per handover byte (handover_per_byte_s, a gather and scatter of rows) is charged on the
+  handover and the proxy bytes alike, the network on top for the proxies.
 Shares: fluid = fluid work + pressure + fluid halos; DEM = DEM work + ghost updates; coupling =
 coupling arithmetic; inter-physics = deposit sum + proxies (+ in-rank copies of the independent
 strategy at memory speed); wait = step - mean rank time. The step is the slowest rank's time
@@ -218,7 +222,12 @@ def predict_layout(costs, layout, prof):
         dem_net = net("dem_ghost", r)
         cpl = coupled * costs["coupling_per_particle_step"] * f["coupling"]
         inter = net("deposit_sum", r) + net("proxy", r)
-        if indep:
+        if indep and "handover_per_byte_s" in costs:
+            # every row is gathered and its force scattered, whether it stays in the rank or
+            # travels: the calibrated per-byte cost on both, the network on top for the proxies
+            inter += ((ks["force_handover"]["bytes"][r] + ks["proxy"]["bytes"][r]) *
+                      costs["handover_per_byte_s"])
+        elif indep:
             inter += ks["force_handover"]["bytes"][r] / prof["memory_Bps"]
         rows.append((fluid + psetup + psolve + fluid_net, dem + dem_net, cpl, inter,
                      psetup + psolve + pressure_net))

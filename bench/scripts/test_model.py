@@ -236,6 +236,28 @@ def main():
     check("2 rank coupling share", p2["coupling"], cpl / (fluid + setup + solve + cpl))
     check("2 rank contention", p2["memory_contention"], 2.0)
 
+    # --- the independent strategy's handover: a 1-rank run of it gives 0.5 ns a byte (0.02 s
+    # of exchange_local over 10 steps for 4e7 handover bytes); at 2 ranks each rank gathers
+    # 1e6 bytes for itself and 1e6 for the other rank, which also cross the network (1 GB/s,
+    # 2 messages)
+    ri = report(10, alone)
+    ri["timers"]["exchange_local"] = {"avg": 0.02, "busy_avg": 0.02, "calls": 10}
+    ri["exchange_kinds"] = {"force_handover": {"bytes": 4e7}}
+    ci = model.calibrate(ri, "avg")
+    check("handover per byte", ci["handover_per_byte_s"], 0.02 / 4e7)
+    li = layout(2)
+    li["strategy"] = "independent"
+    li["per_rank"]["proxies"] = [50, 50]
+    li["per_rank"]["per_step"]["force_handover"] = {"bytes": [1e6, 1e6], "messages": [0, 0]}
+    li["per_rank"]["per_step"]["proxy"] = {"bytes": [1e6, 1e6], "messages": [2, 2]}
+    pi = model.predict_layout(ci, li, prof)
+    inter_i = 2e6 * 0.5e-9 + 2 * 1e-6 + 1e6 / 1e9
+    check("independent inter-physics, calibrated handover", pi["inter_physics"] * pi["step_s"],
+          inter_i)
+    pu = model.predict_layout(c, li, prof)  # no handover in the calibration: memory speed
+    check("independent inter-physics, memory speed", pu["inter_physics"] * pu["step_s"],
+          1e6 / 1e9 + 2 * 1e-6 + 1e6 / 1e9)
+
     # --- with the machine's noise: eta(2) = 0.04 (compute), 0.10 (memory); each group's eta
     # mixes them by its memory share (fluid 0.5: 0.07; solve 1: 0.10; set-up 0: 0.04; coupling
     # 0: 0.04). The solve's and set-up's extra time is fluid time, the rest is wait.
