@@ -45,8 +45,8 @@ Independent strategy: the handover of particle rows inside a rank (force_handove
   time per handover byte (handover_per_byte_s, a gather and scatter of rows) is charged on the
   handover and the proxy bytes alike, the network on top for the proxies.
 Shares: fluid = fluid work + pressure + fluid halos; DEM = DEM work + ghost updates; coupling =
-coupling arithmetic; inter-physics = deposit sum + proxies (+ in-rank copies of the independent
-strategy at memory speed); wait = step - mean rank time. The step is the slowest rank's time
+coupling arithmetic; inter-physics = deposit sum + proxies (+ the independent strategy's
+handover, above); wait = step - mean rank time. The step is the slowest rank's time
 plus the noise.
 
 Usage:

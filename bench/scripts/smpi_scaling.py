@@ -145,12 +145,11 @@ def run_one(a, strategy, ranks, folder):
            "simulation_wall_s": float(m.group(1)), "simulation_peak_mib": float(m.group(2))}
     for k in SHARES:
         row["share_" + k] = rep["fractions"].get(k, 0.0)
+    # grouped as the model groups them: its DEM share is the DEM work and the ghost updates
     steps = rep["run"]["steps"]
-    t = rep.get("timers", {})
-    row["dem_s_simulated"] = sum(v.get("avg", 0.0) for k, v in t.items()
-                                 if k.startswith("dem_")) / steps
-    row["pressure_s_simulated"] = sum(t.get(k, {}).get("avg", 0.0) for k in (
-        "fluid_pressure_assemble", "fluid_pressure_solve")) / steps
+    tg = model.group_times(rep, "avg")
+    row["dem_s_simulated"] = (tg["dem"] + model.timer(rep, "dem_ghost", "avg")) / steps
+    row["pressure_s_simulated"] = (tg["pressure_setup"] + tg["pressure_solve"]) / steps
     row["particles"] = rep.get("bed", {}).get("particles", "")
     row["contacts_per_particle"] = rep.get("bed", {}).get("contacts_per_particle", "")
     return row
