@@ -17,7 +17,7 @@ void forLayer(Field3<double>& f, int b, int layer, int srcLayer, F&& fn) {
   IndexBox box = f.allocated();
   box.lo[b] = layer;
   box.hi[b] = layer + 1;
-  const std::ptrdiff_t stride = b == 0 ? 1 : b == 1 ? f.strideY() : f.strideZ();
+  const std::ptrdiff_t stride = f.stride(b);
   const std::ptrdiff_t shift = static_cast<std::ptrdiff_t>(srcLayer - layer) * stride;
   double* p = f.data().data();
   for (int k = box.lo[2]; k < box.hi[2]; ++k)
@@ -361,7 +361,7 @@ void predictBoxFaces(const Decomposition& dec, const BoxBc& bc, int c, Field3<do
                      Field3<double>& uPrev) {
   double* up = u.data().data();
   double* pp = uPrev.data().data();
-  const std::ptrdiff_t stride = c == 0 ? 1 : c == 1 ? u.strideY() : u.strideZ();
+  const std::ptrdiff_t stride = u.stride(c);
   for (int s = 0; s < 2; ++s) {
     const std::ptrdiff_t sh = s == 0 ? stride : -stride;
     forBoxFace(dec, bc, c, s, [&](int i, int j, int k, const FaceBc& fb) {
@@ -379,7 +379,7 @@ void projectOutletFaces(const Decomposition& dec, const BoxBc& bc, int c, Field3
   const double* en = eps.data().data();
   const double* kk = K.data().data();
   const double* pp = p.data().data();
-  const std::ptrdiff_t cs = c == 0 ? 1 : c == 1 ? eps.strideY() : eps.strideZ();
+  const std::ptrdiff_t cs = eps.stride(c);
   for (int s = 0; s < 2; ++s) {
     if (!bc.anyOnFace(c, s, BcType::Outlet)) continue;
     forBoxFace(dec, bc, c, s, [&](int i, int j, int k, const FaceBc& fb) {

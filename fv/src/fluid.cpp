@@ -273,7 +273,7 @@ void FluidSolver::cellVelocity(std::array<CellField, 3>& out) {
     const auto& U = m.f.u[c];
     IndexBox b = cl.allocated();
     for (int a = 0; a < 3; ++a) b.lo[a] += kGhost - 1, b.hi[a] -= kGhost - 1;  // one ghost layer
-    const std::ptrdiff_t s = strideOf(U, c);
+    const std::ptrdiff_t s = U.stride(c);
     forFaces(U, out[c], b, [&](std::ptrdiff_t q, std::ptrdiff_t cc) {
       out[c].data()[cc] = 0.5 * (U.data()[q] + U.data()[q + s]);
     });
@@ -291,7 +291,7 @@ void FluidSolver::pressureGradient(std::array<CellField, 3>& out) {
   const CellField& p = m.f.p;
   for (int c = 0; c < 3; ++c) {
     if (!(out[c].layout() == cl)) out[c] = CellField(cl);
-    const std::ptrdiff_t s = strideOf(p, c);
+    const std::ptrdiff_t s = p.stride(c);
     const double ih = 1.0 / m.h[c];
     const bool lowB = m.dec.atLowBoundary(c), highB = m.dec.atHighBoundary(c);
     forEach(IndexBox{{0, 0, 0}, n}, [&](int i, int j, int k) {

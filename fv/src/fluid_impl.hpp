@@ -21,10 +21,6 @@ namespace coloc::fv {
 
 inline constexpr int kGhost = 2;
 
-inline std::ptrdiff_t strideOf(const Field3<double>& f, int e) {
-  return e == 0 ? 1 : e == 1 ? f.strideY() : f.strideZ();
-}
-
 /// Run fn(flatFaceIndex, flatCellIndex) over a box of faces of component d (same (i,j,k)).
 template <class F>
 inline void forFaces(const Field3<double>& u, const Field3<double>& cell, const IndexBox& b,

@@ -38,9 +38,9 @@ double FluidSolver::Impl::heatFluxes(const double* T, int i, int j, int k, doubl
   for (int a = 0; a < 3; ++a) {
     const double area = vol / h[a];
     const double dcoef = alpha * area / h[a];
-    const std::ptrdiff_t s = strideOf(f.T, a);
+    const std::ptrdiff_t s = f.T.stride(a);
     const auto& U = f.u[a];
-    const std::ptrdiff_t q0 = U.index(i, j, k), qs = strideOf(U, a);
+    const std::ptrdiff_t q0 = U.index(i, j, k), qs = U.stride(a);
     for (int side = 0; side < 2; ++side) {
       const bool boundary = side == 0 ? (dec.atLowBoundary(a) && idx[a] == 0)
                                       : (dec.atHighBoundary(a) && idx[a] == n[a] - 1);

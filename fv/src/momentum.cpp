@@ -14,7 +14,7 @@ void massFluxes(const FaceField& u, const CellField& eps, FaceField& M) {
     IndexBox box = U.allocated();
     box.lo[d] += 1;  // face idx needs cells idx - e_d and idx
     box.hi[d] -= 1;
-    const std::ptrdiff_t cd = strideIn(eps, d);
+    const std::ptrdiff_t cd = eps.stride(d);
     const double* up = U.data().data();
     double* mp = m.data().data();
     for (int k = box.lo[2]; k < box.hi[2]; ++k)

@@ -34,10 +34,6 @@ void predictFacesAvx512(const PredictFaces&, Field3<double>&, Field3<double>&);
 
 namespace {  // NOLINT(google-build-namespaces,cert-dcl59-cpp): one copy per ISA
 
-inline std::ptrdiff_t strideIn(const Field3<double>& f, int e) {
-  return e == 0 ? 1 : e == 1 ? f.strideY() : f.strideZ();
-}
-
 /// Value at the face between b and c (a before b, d after c along the axis), for mass flux m.
 /// Without branches (selections the vectoriser turns into masks); the same values as
 ///   up, dn, uu = m >= 0 ? (b, c, a) : (c, b, d);  da = up - uu, db = dn - up
@@ -134,12 +130,12 @@ void kernel(int d, const FaceField& u, const FaceField& M, const CellField& eps,
   const double* md = M[d].data().data();
   const double* ec = eps.data().data();
   double* hp = H.data().data();
-  const std::ptrdiff_t sd = strideIn(Ud, d);           // along d in the layout of component d
-  const std::ptrdiff_t cd = strideIn(eps, d);          // along d in the cell layout
+  const std::ptrdiff_t sd = Ud.stride(d);              // along d in the layout of component d
+  const std::ptrdiff_t cd = eps.stride(d);             // along d in the cell layout
   const int ea = d == 0 ? 1 : 0, eb = d == 2 ? 1 : 2;  // the transverse axes, ascending
   const auto acrossOf = [&](int e) {
-    return Across{M[e].data().data(), u[e].data().data(), strideIn(Ud, e), strideIn(u[e], e),
-                  strideIn(u[e], d),  strideIn(eps, e),   1.0 / prm.h[e]};
+    return Across{M[e].data().data(), u[e].data().data(), Ud.stride(e),  u[e].stride(e),
+                  u[e].stride(d),     eps.stride(e),      1.0 / prm.h[e]};
   };
   const Across A = acrossOf(ea), B = acrossOf(eb);
   const double ihd = 1.0 / prm.h[d];
@@ -174,7 +170,7 @@ inline void predictRow(int n, double* __restrict up, double* __restrict pp,
 inline void predict(const PredictFaces& p, Field3<double>& U, Field3<double>& P) {
   const IndexBox& box = p.box;
   const CellField& eps = *p.eps;
-  const std::ptrdiff_t cs = strideIn(eps, p.c);
+  const std::ptrdiff_t cs = eps.stride(p.c);
   const int ni = box.hi[0] - box.lo[0];
   for (int k = box.lo[2]; k < box.hi[2]; ++k)
     for (int j = box.lo[1]; j < box.hi[1]; ++j)

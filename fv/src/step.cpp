@@ -84,7 +84,7 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
         double diag = 0;
         const int idx[3] = {i, j, k};
         for (int a = 0; a < 3; ++a) {
-          const std::ptrdiff_t s = strideOf(e, a);
+          const std::ptrdiff_t s = e.stride(a);
           const std::ptrdiff_t c = e.index(i, j, k);
           for (int side = 0; side < 2; ++side) {
             const bool boundary = side == 0 ? (dec.atLowBoundary(a) && idx[a] == 0)
@@ -243,8 +243,8 @@ void FluidSolver::Impl::assemblePressureRhs(double dt) {
         const int idx[3] = {i, j, k};
         for (int a = 0; a < 3; ++a) {
           const auto& U = f.u[a];
-          const std::ptrdiff_t s = strideOf(f.eps, a);
-          const std::ptrdiff_t q = U.index(i, j, k), qs = strideOf(U, a);
+          const std::ptrdiff_t s = f.eps.stride(a);
+          const std::ptrdiff_t q = U.index(i, j, k), qs = U.stride(a);
           const double elo = 0.5 * (en[c - s] + en[c]), ehi = 0.5 * (en[c] + en[c + s]);
           div += (ehi * U.data()[q + qs] - elo * U.data()[q]) / h[a];
           flux += (std::fabs(ehi * U.data()[q + qs]) + std::fabs(elo * U.data()[q])) / h[a];
@@ -341,7 +341,7 @@ void FluidSolver::Impl::project(double dt) {
   for (int c = 0; c < 3; ++c) {
     auto& U = f.u[c];
     double* up = U.data().data();
-    const std::ptrdiff_t cs = strideOf(f.eps, c);
+    const std::ptrdiff_t cs = f.eps.stride(c);
     const double ih = dt / h[c];
     forFaces(U, f.eps, interiorFaces(c), [&](std::ptrdiff_t q, std::ptrdiff_t cc) {
       const double ef = 0.5 * (en[cc - cs] + en[cc]);
@@ -364,7 +364,7 @@ void FluidSolver::Impl::recordBalances() {
   const double vol = dec.grid().cellVolume();
   for (int c = 0; c < 3; ++c) {
     const auto& U = f.u[c];
-    const std::ptrdiff_t cs = strideOf(f.eps, c);
+    const std::ptrdiff_t cs = f.eps.stride(c);
     const double* kk = f.K.data().data();
     const double* kup = f.KUp[c].data().data();
     const double* up = U.data().data();

@@ -16,10 +16,6 @@ using namespace coloc::fv;
 
 namespace {
 
-std::ptrdiff_t strideOf(const Field3<double>& f, int e) {
-  return e == 0 ? 1 : e == 1 ? f.strideY() : f.strideZ();
-}
-
 template <Convection C>
 double faceValue(double m, double a, double b, double c, double d) {
   if constexpr (C == Convection::Central) {
@@ -50,8 +46,8 @@ void reference(int d, const FaceField& u, const FaceField& M, const CellField& e
   const double* md = M[d].data().data();
   const double* ec = eps.data().data();
   double* hp = H.data().data();
-  const std::ptrdiff_t sd = strideOf(Ud, d);
-  const std::ptrdiff_t cd = strideOf(eps, d);
+  const std::ptrdiff_t sd = Ud.stride(d);
+  const std::ptrdiff_t cd = eps.stride(d);
   int es[2], ne = 0;
   for (int e = 0; e < 3; ++e)
     if (e != d) es[ne++] = e;
@@ -61,10 +57,10 @@ void reference(int d, const FaceField& u, const FaceField& M, const CellField& e
   double he[2];
   for (int t = 0; t < 2; ++t) {
     const int e = es[t];
-    se[t] = strideOf(Ud, e);
-    see[t] = strideOf(u[e], e);
-    sde[t] = strideOf(u[e], d);
-    ce[t] = strideOf(eps, e);
+    se[t] = Ud.stride(e);
+    see[t] = u[e].stride(e);
+    sde[t] = u[e].stride(d);
+    ce[t] = eps.stride(e);
     he[t] = prm.h[e];
   }
   const double ihd = 1.0 / hd;
@@ -241,7 +237,7 @@ TEST(MomentumIsa, EveryPredictorVariantMatchesTheScalarLoopBitwise) {
     // The loop of step.cpp's predictVelocity() before it moved to momentum_kernels.hpp.
     Field3<double> wantU = u0, wantP(fl, -7.0);
     {
-      const std::ptrdiff_t cs = strideOf(en, c);
+      const std::ptrdiff_t cs = en.stride(c);
       const double* enp = en.data().data();
       const double* eop = eo.data().data();
       const double* kk = K.data().data();

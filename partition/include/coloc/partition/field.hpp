@@ -82,6 +82,8 @@ class Field3 {
   /// Strides in elements along y and z (x is 1).
   std::ptrdiff_t strideY() const { return sy_; }
   std::ptrdiff_t strideZ() const { return sz_; }
+  /// Stride in elements along axis a (0: x, 1: y, 2: z).
+  std::ptrdiff_t stride(int a) const { return a == 0 ? 1 : a == 1 ? sy_ : sz_; }
   std::span<T> data() { return data_; }
   std::span<const T> data() const { return data_; }
   void fill(T v) { std::fill(data_.begin(), data_.end(), v); }
