@@ -63,13 +63,14 @@ void ensureRows(std::vector<T>& v, std::size_t need, std::size_t rowsDone, std::
 }
 
 /// After a row-by-row fill: an extrapolated capacity above the size + 1/kSlack (by more than a
-/// quarter of that headroom) is trimmed to the size + 1/kSlack (one copy; grow-only otherwise).
+/// quarter of that headroom) is trimmed to the size + 1/kSlack (one copy; grow-only otherwise),
+/// never below `floor` elements (a buffer lent to another use of that size keeps it).
 template <class T>
-void trimRows(std::vector<T>& v) {
+void trimRows(std::vector<T>& v, std::size_t floor = 0) {
   const std::size_t n = v.size();
-  if (v.capacity() > n + n / kSlack + n / (4 * kSlack) + 64) {
+  if (v.capacity() > std::max(n + n / kSlack + n / (4 * kSlack) + 64, floor)) {
     std::vector<T> t;
-    t.reserve(n + n / kSlack + 16);
+    t.reserve(std::max(n + n / kSlack + 16, floor));
     t.assign(v.begin(), v.end());
     v.swap(t);
     hugePages(v);
