@@ -83,13 +83,16 @@ void NeighbourSearch::buildLists(const ParticleStore& p, double skin, const Wall
     const auto a = static_cast<std::size_t>(bins_.binItems[q]);
     const bool ownA = a < n;
     const int bx = ba % bins_.nbx[0], by = (ba / bins_.nbx[0]) % bins_.nbx[1], bz = ba / sz;
-    const auto visit = [&](int from, int to) {
+    // the holder's values and the arrays' addresses as copies in the closure: captured by
+    // reference, they would be loaded again for every candidate (push_back may write anywhere)
+    const auto visit = [&, X, Y, Z, R, items = bins_.binItems.data(), xa = X[a], ya = Y[a],
+                        za = Z[a], ra = R[a]](int from, int to) {
       for (int t = from; t < to; ++t) {
-        const int j = bins_.binItems[static_cast<std::size_t>(t)];
+        const int j = items[t];
         const auto u = static_cast<std::size_t>(j);
         if (!ownA && u >= n) continue;
-        const double ex = X[a] - X[u], ey = Y[a] - Y[u], ez = Z[a] - Z[u];
-        const double cut = R[a] + R[u] + skin;
+        const double ex = xa - X[u], ey = ya - Y[u], ez = za - Z[u];
+        const double cut = ra + R[u] + skin;
         if (ex * ex + ey * ey + ez * ez < cut * cut) {
           list_.nbr.push_back(j);
           lookup(a, j);
