@@ -72,14 +72,16 @@ void NeighbourSearch::sortByBin(ParticleStore& p) {
   // applied column by column through a buffer: gathered (independent loads; a walk along the
   // permutation's cycles is a chain of dependent ones, a cache miss each where the cycles are
   // long), then copied back. The buffer is the neighbour list's entry array, dead until its build
-  // and grown to 8 bytes a particle (the build needs more: ~5 entries a particle in a bed), so no
-  // memory is added. Bytes are moved with memcpy: the buffer's elements are ints.
-  ensure(list_.nbr, 2 * n);
-  if (list_.nbr.size() < 2 * n) list_.nbr.resize(2 * n);
+  // and kept at kSortBufferInts a particle: a bed's list needs more (~5 entries a particle), so
+  // memory grows only where the list is shorter (up to 8 bytes a particle). Bytes are moved with
+  // memcpy: the buffer's elements are ints.
+  const std::size_t bufInts = kSortBufferInts * n;
+  ensure(list_.nbr, bufInts);
+  if (list_.nbr.size() < bufInts) list_.nbr.resize(bufInts);
   auto* const buf = reinterpret_cast<unsigned char*>(list_.nbr.data());
   const auto apply = [&](auto& vec) {
     using T = typename std::decay_t<decltype(vec)>::value_type;
-    static_assert(std::is_trivially_copyable_v<T> && sizeof(T) <= 2 * sizeof(int));
+    static_assert(std::is_trivially_copyable_v<T> && sizeof(T) <= kSortBufferInts * sizeof(int));
     T* const v = vec.data();
     for (std::size_t k = 0; k < n; ++k) std::memcpy(buf + k * sizeof(T), v + perm[k], sizeof(T));
     if (n > 0) std::memcpy(v, buf, n * sizeof(T));

@@ -74,6 +74,9 @@ class NeighbourSearch {
   // sortByBin to the end of buildLists: the (bin, id) re-sort's permutation (scratch_[k]: the
   // history row of particle k); in packHistory: destination codes, then row cursors
   std::vector<int> scratch_;
+  // ints of the list's entry array that sortByBin borrows per owned particle (one column
+  // element of up to 8 bytes); buildLists' trim keeps at least that many
+  static constexpr std::size_t kSortBufferInts = 2;
 };
 
 }  // namespace coloc::dem::detail

@@ -121,7 +121,7 @@ void NeighbourSearch::buildLists(const ParticleStore& p, double skin, const Wall
       }
   }
   list_.rowStart[nAll] = static_cast<int>(list_.nbr.size());
-  trimRows(list_.nbr, 2 * n);  // sortByBin's buffer: 8 bytes an owned particle
+  trimRows(list_.nbr, kSortBufferInts * n);  // sortByBin's buffer
   trimRows(list_.slot);
   // rows no entry took are free slots
   hist_.freeSlots.clear();
