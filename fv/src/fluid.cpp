@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "cell_rows.hpp"
 #include "fluid_impl.hpp"
 
 namespace coloc::fv {
@@ -69,6 +70,7 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
   matrix.assign(7 * n, 0.0);
   rhs.assign(n, 0.0);
   sol.assign(n, 0.0);
+  rowWork.assign(6 * static_cast<std::size_t>(dec.cells()[0]), 0.0);
   cellHalo = HaloPlan(dec, cl);
   for (int c = 0; c < 3; ++c) faceHalo[c] = HaloPlan(dec, f.u[c].layout());
   ps = std::make_unique<PressureSolver>(dec, prm.pressure);
@@ -294,10 +296,11 @@ void FluidSolver::pressureGradient(std::array<CellField, 3>& out) {
     const std::ptrdiff_t s = p.stride(c);
     const double ih = 1.0 / m.h[c];
     const bool lowB = m.dec.atLowBoundary(c), highB = m.dec.atHighBoundary(c);
-    forEach(IndexBox{{0, 0, 0}, n}, [&](int i, int j, int k) {
+    const double* pp = p.data().data();
+    // a cell with a boundary face across c, cell by cell
+    const auto cell = [&](int i, int j, int k) {
       const int idx = c == 0 ? i : c == 1 ? j : k;
       const std::ptrdiff_t q = p.index(i, j, k);
-      const double* pp = p.data().data();
       auto faceGrad = [&](int face) -> double {
         // face: local face index along c (low face of cell `face`)
         if (face == 0 && lowB) {
@@ -317,7 +320,23 @@ void FluidSolver::pressureGradient(std::array<CellField, 3>& out) {
         return (pp[r] - pp[r - s]) * ih;
       };
       out[c](i, j, k) = 0.5 * (faceGrad(idx) + faceGrad(idx + 1));
-    });
+    };
+    // the others row by row (cell_rows.hpp: the same arithmetic)
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j) {
+        int i0 = 0, i1 = n[0];
+        if (c == 0) {
+          i0 = lowB ? 1 : 0;
+          i1 = std::max(i0, highB ? n[0] - 1 : n[0]);
+        } else {
+          const int idx = c == 1 ? j : k;
+          if ((lowB && idx == 0) || (highB && idx == n[c] - 1)) i0 = i1 = n[0];
+        }
+        gradientRow(pp + p.index(0, j, k), s, ih, i0, i1,
+                    out[c].data().data() + out[c].index(0, j, k));
+        for (int i = 0; i < i0; ++i) cell(i, j, k);
+        for (int i = i1; i < n[0]; ++i) cell(i, j, k);
+      }
   }
   {
     ScopedPhase t(m.timers, Phase::FluidHalo);

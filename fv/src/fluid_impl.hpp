@@ -46,6 +46,9 @@ struct FluidSolver::Impl {
   std::array<Field3<double>, 3> Hn, Ho;  // explicit terms at n and n-1
   FaceField uPrev;
   std::vector<double> matrix, rhs, sol;
+  // a row of cells' work: 6 face weights a cell (assembleMatrix), squared scale terms
+  // (assemblePressureRhs)
+  std::vector<double> rowWork;
   std::unique_ptr<PressureSolver> ps;
   HaloPlan cellHalo;
   std::array<HaloPlan, 3> faceHalo;
@@ -99,6 +102,7 @@ struct FluidSolver::Impl {
   /// d eps/dt for q = p dt, its flux scale, the warm start; the volume change of the step.
   void assemblePressureRhs(double dt);
   void assembleMatrix(double dt);
+  void interiorCells(int j, int k, int& i0, int& i1) const;
   /// PCG on the pressure equation; iteration counters.
   void solvePressure();
   /// p from q; u^{n+1} = u* - eps_f/(eps_f + K_f dt) grad q on interior and outlet faces.

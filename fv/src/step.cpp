@@ -10,6 +10,7 @@
 #include <cmath>
 #include <string>
 
+#include "cell_rows.hpp"
 #include "coloc/core/failure.hpp"
 #include "fluid_impl.hpp"
 
@@ -68,6 +69,16 @@ void FluidSolver::Impl::fillGhosts() {
   for (int c = 0; c < 3; ++c) applyVelocityBc(dec, bc, c, f.u[c], &f.eps);
   uGhostsFresh = true;
 }
+void FluidSolver::Impl::interiorCells(int j, int k, int& i0, int& i1) const {
+  // the cells of row (j, k) without a boundary face: [i0, i1) (empty on a row along one)
+  const Int3 n = dec.cells();
+  const bool edgeRow = (dec.atLowBoundary(1) && j == 0) ||
+                       (dec.atHighBoundary(1) && j == n[1] - 1) ||
+                       (dec.atLowBoundary(2) && k == 0) || (dec.atHighBoundary(2) && k == n[2] - 1);
+  i0 = edgeRow ? n[0] : (dec.atLowBoundary(0) ? 1 : 0);
+  i1 = std::max(i0, dec.atHighBoundary(0) ? n[0] - 1 : n[0]);
+  i0 = std::min(i0, i1);
+}
 void FluidSolver::Impl::assembleMatrix(double dt) {
   // Row of cell P: sum_f w_f (q_P - q_nb), w_f = eps_f^2 / ((eps_f + K_f dt) h_d^2), q = p dt.
   // An outlet face (Dirichlet p at the face, half a cell away) doubles w and moves the known
@@ -75,12 +86,19 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
   const Int3 n = dec.cells();
   const CellField& e = f.eps;
   const CellField& K = f.K;
-  std::size_t r = 0;
   bool localK = false;
+  const auto ws = static_cast<std::size_t>(n[0]);
+  MatrixRow mrow{};
+  for (int a = 0; a < 3; ++a) {
+    mrow.cellStride[a] = e.stride(a);
+    mrow.h[a] = h[a];
+  }
+  mrow.dt = dt;
+  std::size_t r0 = 0;
   for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i, ++r) {
-        double* row = &matrix[7 * r];
+    for (int j = 0; j < n[1]; ++j, r0 += ws) {
+      const auto cell = [&](int i) {  // one cell, with its boundary faces
+        double* row = &matrix[7 * (r0 + static_cast<std::size_t>(i))];
         double diag = 0;
         const int idx[3] = {i, j, k};
         for (int a = 0; a < 3; ++a) {
@@ -106,7 +124,16 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
           }
         }
         row[0] = diag;
-      }
+      };
+      int i0 = 0, i1 = 0;
+      interiorCells(j, k, i0, i1);
+      const std::ptrdiff_t c0 = e.index(0, j, k);
+      mrow.eps = e.data().data() + c0;
+      mrow.K = K.data().data() + c0;
+      if (matrixRow(mrow, i0, i1, rowWork.data(), ws, matrix.data() + 7 * r0)) localK = true;
+      for (int i = 0; i < i0; ++i) cell(i);
+      for (int i = i1; i < n[0]; ++i) cell(i);
+    }
   anyK = dec.comm().max(localK ? 1 : 0) == 1;  // the same rebuild decision on every rank
   ps->setMatrix(matrix);
   matrixDt = dt;
@@ -119,29 +146,47 @@ void FluidSolver::Impl::computeRates(double dt) {
   double rate = 0, du = 0, umax = 0;
   Int3 at{0, 0, 0};
   std::string err;
+  // Row by row: the per-cell values through ratesRow (cell_rows.hpp), then the maxima in cell
+  // order; a cell with a non-finite face velocity is named by the cell-by-cell check below.
+  const auto ws = static_cast<std::size_t>(n[0]);
+  const double* const rr = rowWork.data();
+  RatesRow row{};
+  for (int a = 0; a < 3; ++a) {
+    row.faceStride[a] = f.u[a].stride(a);
+    row.h[a] = h[a];
+  }
+  const auto badCell = [&](int i, int j, int k) {
+    for (int a = 0; a < 3; ++a) {
+      const auto& U = f.u[a];
+      const double lo = U(i, j, k);
+      const double hi = U(i + (a == 0), j + (a == 1), k + (a == 2));
+      if (!std::isfinite(lo) || !std::isfinite(hi)) {
+        err = fmt::format(
+            "fluid step {}: non-finite velocity u_{} = {:g} at cell ({}, {}, {}) (global index)",
+            steps, "xyz"[a], std::isfinite(lo) ? hi : lo, dec.lo()[0] + i, dec.lo()[1] + j,
+            dec.lo()[2] + k);
+        return;
+      }
+    }
+  };
   for (int k = 0; k < n[2] && err.empty(); ++k)
-    for (int j = 0; j < n[1] && err.empty(); ++j)
+    for (int j = 0; j < n[1] && err.empty(); ++j) {
+      for (int a = 0; a < 3; ++a) {
+        row.u[a] = f.u[a].data().data() + f.u[a].index(0, j, k);
+        row.uPrev[a] = dt > 0 ? uPrev[a].data().data() + uPrev[a].index(0, j, k) : nullptr;
+      }
+      ratesRow(row, n[0], rowWork.data(), ws);
       for (int i = 0; i < n[0]; ++i) {
-        double r = 0;
-        for (int a = 0; a < 3; ++a) {
-          const auto& U = f.u[a];
-          const double lo = U(i, j, k);
-          const double hi = U(i + (a == 0), j + (a == 1), k + (a == 2));
-          if (!std::isfinite(lo) || !std::isfinite(hi)) {
-            err = fmt::format(
-                "fluid step {}: non-finite velocity u_{} = {:g} at cell ({}, {}, {}) (global "
-                "index)",
-                steps, "xyz"[a], std::isfinite(lo) ? hi : lo, dec.lo()[0] + i, dec.lo()[1] + j,
-                dec.lo()[2] + k);
-            break;
-          }
-          r += std::max(std::fabs(lo), std::fabs(hi)) / h[a];
-          umax = std::max(umax, std::fabs(lo));
-          if (dt > 0) du = std::max(du, std::fabs(lo - uPrev[a](i, j, k)));
+        if (rr[3 * ws + static_cast<std::size_t>(i)] != 0.0) {
+          badCell(i, j, k);
+          break;
         }
-        if (!err.empty()) break;
+        const double r = rr[static_cast<std::size_t>(i)];
+        umax = std::max(umax, rr[ws + static_cast<std::size_t>(i)]);
+        if (dt > 0) du = std::max(du, rr[2 * ws + static_cast<std::size_t>(i)]);
         if (r > rate) rate = r, at = {i, j, k};
       }
+    }
   if (err.empty() && dt > 0 && rate * dt > prm.cflMax) {
     err = fmt::format(
         "fluid step {}: CFL {:g} at cell ({}, {}, {}) (global index) exceeds fluid.cfl_max = {:g} "
@@ -235,10 +280,23 @@ void FluidSolver::Impl::assemblePressureRhs(double dt) {
   const bool warm = prm.warmStart;
   const double* en = f.eps.data().data();
   const double* eo = f.epsOld.data().data();
+  // Row by row: the cells away from boundary faces through rhsRow (cell_rows.hpp), the
+  // others cell by cell; then the sums over the row's cells, in cell order.
+  double* const sc2 = rowWork.data();
+  RhsRow row{};
+  for (int a = 0; a < 3; ++a) {
+    row.cellStride[a] = f.eps.stride(a);
+    row.faceStride[a] = f.u[a].stride(a);
+    row.h[a] = h[a];
+  }
+  row.idt = idt;
+  row.dt = dt;
   for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i, ++r) {
-        const std::ptrdiff_t c = f.eps.index(i, j, k);
+    for (int j = 0; j < n[1]; ++j) {
+      const std::ptrdiff_t c0 = f.eps.index(0, j, k);
+      const auto r0 = r;
+      const auto cell = [&](int i) {  // one cell, with its boundary faces
+        const std::ptrdiff_t c = c0 + i;
         double div = 0, flux = 0;
         const int idx[3] = {i, j, k};
         for (int a = 0; a < 3; ++a) {
@@ -258,18 +316,33 @@ void FluidSolver::Impl::assemblePressureRhs(double dt) {
           }
         }
         const double de = en[c] - eo[c];
-        rhs[r] = -div - de * idt;
+        rhs[r0 + static_cast<std::size_t>(i)] = -div - de * idt;
+        const double sc = flux + std::fabs(de) * idt;
+        sc2[i] = sc * sc;
+        sol[r0 + static_cast<std::size_t>(i)] = warm ? f.p.data()[c] * dt : 0.0;
+      };
+      int i0 = 0, i1 = 0;
+      interiorCells(j, k, i0, i1);
+      for (int a = 0; a < 3; ++a) row.u[a] = f.u[a].data().data() + f.u[a].index(0, j, k);
+      row.eps = en + c0;
+      row.epsOld = eo + c0;
+      row.p = warm ? f.p.data().data() + c0 : nullptr;
+      rhsRow(row, i0, i1, rhs.data() + r0, sc2, sol.data() + r0);
+      for (int i = 0; i < i0; ++i) cell(i);
+      for (int i = i1; i < n[0]; ++i) cell(i);
+      for (int i = 0; i < n[0]; ++i, ++r) {
+        const std::ptrdiff_t c = c0 + i;
         if (!std::isfinite(rhs[r]) && badCell[0] < 0) {
           badCell = {dec.lo()[0] + i, dec.lo()[1] + j, dec.lo()[2] + k};
           badValue = rhs[r];
         }
-        const double sc = flux + std::fabs(de) * idt;
-        scale2 += sc * sc;
+        const double de = en[c] - eo[c];
+        scale2 += sc2[i];
         dvol += de;
         dvolGross += std::fabs(de);
         sum += rhs[r];
-        sol[r] = warm ? f.p.data()[c] * dt : 0.0;  // initial guess
       }
+    }
   dVolLocal = dvol * dec.grid().cellVolume() / dt;
   dVolGrossLocal = dvolGross * dec.grid().cellVolume() / dt;
   rhsScaleLast = std::sqrt(dec.comm().sum(scale2));
