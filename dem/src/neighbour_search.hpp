@@ -65,7 +65,7 @@ class NeighbourSearch {
   /// become the largest double).
   double maxDisplacement2(const ParticleStore& p) const;
   /// Bytes of the rebuild's scratch (capacity).
-  std::size_t scratchBytes() const { return cap(scratch_); }
+  std::size_t scratchBytes() const { return cap(scratch_) + cap(candidates_); }
 
  private:
   Bins bins_;
@@ -74,6 +74,8 @@ class NeighbourSearch {
   // sortByBin to the end of buildLists: the (bin, id) re-sort's permutation (scratch_[k]: the
   // history row of particle k); in packHistory: destination codes, then row cursors
   std::vector<int> scratch_;
+  // buildLists: the candidates of one row within reach (at most 1 + 13 bins' worth)
+  std::vector<int> candidates_;
   // ints of the list's entry array that sortByBin borrows per owned particle (one column
   // element of up to 8 bytes); buildLists' trim keeps at least that many
   static constexpr std::size_t kSortBufferInts = 2;
