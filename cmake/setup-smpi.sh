@@ -2,7 +2,7 @@
 # cmake/setup-smpi.sh [BUILD_DIR] [extra cmake args...] — the SimGrid SMPI build of coloc
 # (docs/smpi.md): installs SimGrid (Debian: libsimgrid-dev) when missing, builds hypre
 # from Debian's own source package with smpicc once (BUILD_DIR/hypre, ~3 minutes on 2 cores;
-# one patch for the simulation, cmake/hypre-smpi-exchange.patch),
+# one patch for the simulation, cmake/hypre-smpi-exchange.patch; Debian's compiler flags),
 # then configures and builds coloc with -DCOLOC_SMPI=ON in BUILD_DIR (default: build-smpi).
 # Run it after cmake/setup.sh (which installs the other dependencies). Idempotent.
 set -euo pipefail
@@ -33,7 +33,10 @@ fi
 hypre=$build/hypre
 lib=$hypre/install/lib/libHYPRE.a
 patch_file=$root/cmake/hypre-smpi-exchange.patch
-stamp=$(sha256sum "$patch_file" | cut -c1-16)
+# hypre's compiler flags: Debian's (dpkg-buildflags) with the -O3 its rules append
+# (DEB_CFLAGS_MAINT_APPEND), so a simulated burst runs the code the Open MPI build links.
+hypre_cflags="$(dpkg-buildflags --get CFLAGS 2>/dev/null | sed "s/-ffile-prefix-map=[^ ]*//") -O3"
+stamp=$( (cat "$patch_file"; echo "$hypre_cflags") | sha256sum | cut -c1-16)
 if [[ ! -f $lib || $(cat "$hypre/patch.stamp" 2>/dev/null) != "$stamp" ]]; then
   version=$(dpkg-query -W -f='${Version}' libhypre-dev 2>/dev/null || true)
   echo "coloc setup-smpi: building hypre ${version:-?} with smpicc in $hypre"
@@ -62,8 +65,8 @@ X
   cd "$hypre"/src/hypre-*/src
   git apply "$patch_file"  # git apply works outside a repository
   # SMPI_PRETEND_CC: autoconf's test programs must run as ordinary programs while configuring.
-  # -O2 as Debian builds its libhypre (the Open MPI build's), so simulated bursts cost the same.
-  SMPI_PRETEND_CC=1 ./configure CC=smpicc CXX=smpicxx CFLAGS=-O2 CXXFLAGS=-O2 \
+  SMPI_PRETEND_CC=1 ./configure CC=smpicc CXX=smpicxx CFLAGS="$hypre_cflags" \
+    CXXFLAGS="$hypre_cflags" \
     --prefix="$hypre/install" --disable-fortran --enable-shared=no >"$hypre/configure.log" 2>&1 ||
     { tail -20 "$hypre/configure.log"; exit 1; }
   make -j "$(nproc)" >"$hypre/make.log" 2>&1 || { tail -20 "$hypre/make.log"; exit 1; }

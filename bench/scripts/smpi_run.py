@@ -36,8 +36,28 @@ The settings, and why:
                        charges the root P-1 serialised messages per reduction and costs the
                        simulator O(P^2) per collective (the root's wait for P-1 requests is P-1
                        waitany calls): 1024 ranks did not finish their set-up in 29 minutes.
+
+And one correction of what SMPI charges (--burst-charge, docs/smpi.md "The charge of an empty
+burst"): SMPI times each burst of a rank with the thread's CPU clock, and the interval it times
+holds its own code at the ends of the two MPI calls and one read of that clock (a system call:
+~1.3 us here). An empty burst is charged ~2 us, which a real rank does not spend, on each of
+the thousands of MPI calls hypre makes a step. By default (measured) this script first runs
+smpi_empty_bursts (2 simulated ranks that only exchange) to measure the median charge of an
+empty burst on this machine now, then preloads libcoloc_smpi_burst.so, which subtracts it from
+every burst of the run (never below 0). --burst-charge none leaves SMPI's charge as it is;
+--burst-charge SECONDS subtracts a given charge.
+
+And the simulated ranks' heap: they share one process, so one glibc heap. A real rank's heap is
+its own, and once warm (glibc raises its mmap threshold to the largest block freed, up to
+32 MiB, and its trim threshold to twice that) it reuses its pages step after step; in the
+shared heap, the blocks hypre's set-up frees are trimmed or unmapped and the next rank's
+allocations fault them in again, and the kernel's zeroing of those pages is timed as that rank's
+computation. MALLOC_MMAP_THRESHOLD_=32 MiB and MALLOC_TRIM_THRESHOLD_=64 GiB (unless set in the
+environment) give the simulation a warm real rank's heap: at 112 ranks of case 2 they halved the
+simulated pressure set-up (docs/smpi.md, "The charge of an empty burst").
 """
 import argparse
+import json
 import os
 import re
 import resource
@@ -86,6 +106,69 @@ def write_hostfile(path, platform, ranks):
             f.write(f"{prefix}{lo + r // cores}{suffix}\n")
 
 
+def smpirun_command(ranks, platform, tmp, coll, cfgs, exe, args):
+    hosts = os.path.join(tmp, f"hosts-{ranks}.txt")
+    write_hostfile(hosts, platform, ranks)
+    return (["smpirun", "-np", str(ranks), "-platform", platform, "-hostfile", hosts,
+             "--cfg=smpi/tmpdir:" + tmp, "--log=root.thres:warning"] + SETTINGS +
+            ["--cfg=smpi/coll-selector:" + coll] + ["--cfg=" + c for c in cfgs] + [exe] + args)
+
+
+def burst_library(smpi_build):
+    """The preloaded library and the probe of bench/smpi (built with the SMPI build)."""
+    lib = os.path.join(smpi_build, "libcoloc_smpi_burst.so")
+    probe = os.path.join(smpi_build, "smpi_empty_bursts")
+    for f in (lib, probe):
+        if not os.path.isfile(f):
+            sys.exit(f"smpi_run.py: no '{f}': build it with cmake/setup-smpi.sh "
+                     "(or run with --burst-charge none)")
+    return lib, probe
+
+
+HEAP = {"MALLOC_MMAP_THRESHOLD_": str(32 << 20), "MALLOC_TRIM_THRESHOLD_": str(64 << 30)}
+
+
+def simulation_env():
+    """The environment of smpirun: a warm real rank's heap for the ranks' shared one."""
+    return {**HEAP, **os.environ}
+
+
+def preload_env(lib, offset, stats=None):
+    env = simulation_env()
+    env["LD_PRELOAD"] = lib + (" " + env["LD_PRELOAD"] if env.get("LD_PRELOAD") else "")
+    env["COLOC_SMPI_BURST_OFFSET"] = repr(offset)
+    if stats:
+        env["COLOC_SMPI_BURST_STATS"] = stats
+    else:
+        env.pop("COLOC_SMPI_BURST_STATS", None)
+    return env
+
+
+def measure_empty_burst(lib, probe, platform, tmp, coll, cfgs, iters=20000):
+    """The median charge SMPI gives an empty burst on this machine now (seconds)."""
+    stats = os.path.join(tmp, "empty_bursts.json")
+    cmd = smpirun_command(2, platform, tmp, coll, cfgs, probe, [str(iters)])
+    out = subprocess.run(cmd, env=preload_env(lib, 0.0, stats), capture_output=True, text=True)
+    if out.returncode != 0 or not os.path.isfile(stats):
+        sys.stderr.write(out.stdout + out.stderr)
+        sys.exit(f"smpi_run.py: measuring the charge of an empty burst failed (exit {out.returncode})")
+    with open(stats) as f:
+        st = json.load(f)
+    return st["median_s"], st
+
+
+def burst_charge(value):
+    if value in ("measured", "none"):
+        return value
+    try:
+        v = float(value)
+    except ValueError:
+        v = -1.0
+    if not v >= 0:
+        raise argparse.ArgumentTypeError(f"'{value}': measured, none, or seconds >= 0")
+    return v
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--ranks", type=int, required=True, help="simulated MPI ranks")
@@ -97,6 +180,9 @@ def main():
                     help="SMPI collective selector (ompi, impi, mpich, mvapich2, default); default: ompi")
     ap.add_argument("--cfg", action="append", default=[],
                     help="extra SimGrid setting, e.g. --cfg smpi/privatization:no")
+    ap.add_argument("--burst-charge", type=burst_charge, default="measured",
+                    help="what to subtract from each timed burst: measured (default: the median "
+                    "charge of an empty burst, measured first), none (SMPI's charge), or seconds")
     ap.add_argument("coloc_args", nargs=argparse.REMAINDER, help="-- then coloc's arguments")
     a = ap.parse_args()
     args = a.coloc_args[1:] if a.coloc_args[:1] == ["--"] else a.coloc_args
@@ -107,16 +193,24 @@ def main():
         sys.exit("smpi_run.py: smpirun not found (cmake/setup-smpi.sh installs SimGrid)")
     platform = platform_file(a.platform)
     with tempfile.TemporaryDirectory(prefix="coloc-smpi-") as tmp:
-        hosts = os.path.join(tmp, "hosts.txt")
-        write_hostfile(hosts, platform, a.ranks)
-        cmd = (["smpirun", "-np", str(a.ranks), "-platform", platform, "-hostfile", hosts,
-                "--cfg=smpi/tmpdir:" + tmp, "--log=root.thres:warning"] + SETTINGS +
-               ["--cfg=smpi/coll-selector:" + a.coll] + ["--cfg=" + c for c in a.cfg] + [exe] + args)
+        env, offset = simulation_env(), 0.0
+        if a.burst_charge != "none":
+            lib, probe = burst_library(a.smpi_build)
+            if a.burst_charge == "measured":
+                offset, st = measure_empty_burst(lib, probe, platform, tmp, a.coll, a.cfg)
+                print(f"smpi_run.py: an empty burst is charged {1e6 * offset:.3f} us here (median "
+                      f"of {st['bursts']}; 10th-90th percentile {1e6 * st['p10_s']:.3f}-"
+                      f"{1e6 * st['p90_s']:.3f} us): subtracted from every burst", flush=True)
+            else:
+                offset = a.burst_charge
+            env = preload_env(lib, offset)
+        cmd = smpirun_command(a.ranks, platform, tmp, a.coll, a.cfg, exe, args)
         t0 = time.monotonic()
         # SimGrid reports a deadlock of the simulated ranks on stderr and smpirun still exits 0:
         # stderr is passed through and watched, and a deadlock is a failure.
         deadlock = False
-        with subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, errors="replace") as proc:
+        with subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, errors="replace",
+                              env=env) as proc:
             for line in proc.stderr:
                 sys.stderr.write(line)
                 deadlock = deadlock or "Deadlock detected" in line
@@ -127,7 +221,8 @@ def main():
             rc = 1
     peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
     print(f"smpi_run.py: {a.ranks} simulated ranks on {os.path.basename(platform)}: "
-          f"wall {wall:.1f} s, peak memory {peak:.0f} MiB, exit {rc}", flush=True)
+          f"wall {wall:.1f} s, peak memory {peak:.0f} MiB, exit {rc}, "
+          f"burst charge subtracted {1e6 * offset:.3f} us", flush=True)
     return rc
 
 

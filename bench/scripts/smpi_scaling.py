@@ -8,8 +8,9 @@ Runs the SMPI build (bench/scripts/smpi_run.py) once per strategy and rank count
 DIR/smpi_scaling.csv and DIR/smpi_scaling.png (default DIR: ./out/<case>-smpi-scaling): the
 SIMULATED time per step, speedup against the fewest ranks of the same strategy, the phase shares
 (fluid, DEM, coupling, inter-physics, wait) from report.json, and what each simulation cost (wall
-time, peak memory). Every time in them is simulated and contention-free (SMPI runs each rank's
-bursts alone on this machine's core); the figure says so in its title.
+time, peak memory), and `burst_charge_us`, the charge of an empty burst smpi_run.py measured
+and subtracted from every burst of that run. Every time in them is simulated and contention-free
+(SMPI runs each rank's bursts alone on this machine's core); the figure says so in its title.
 
 --model R.json: beside each simulated point, bench/scripts/model.py's prediction for the same
 case, strategy, rank count and platform, with the same assumption (no memory contention, no
@@ -20,7 +21,8 @@ two links (node, switch, node), bandwidth one link shared by the ranks of a node
 model_step_s, model_error (model / simulated - 1) and the model's shares; the figure draws the
 model dashed. `dem_s_simulated` and `pressure_s_simulated` are the simulated DEM phases and
 hypre's set-up and solve a step (rank averages); `model_dem_s` and `model_error_dem` compare the
-model's DEM alone, since SMPI over-charges hypre's many small bursts (docs/smpi.md). The paper's figures are drawn where it gives them (case 2 at 252 cores: 81 %
+model's DEM alone, since SMPI over-charges hypre's many small bursts (docs/smpi.md), less
+so since the charge of an empty burst is subtracted. The paper's figures are drawn where it gives them (case 2 at 252 cores: 81 %
 fluid, 18 % DummyDEM, < 1 % inter-physics; case 3: > 92 % DEM, < 8 % fluid, < 0.1 %
 inter-physics; independent partitions after SediFoam: ~30 % inter-physics above 200 ranks).
 
@@ -110,6 +112,8 @@ def run_one(a, strategy, ranks, folder):
            a.platform]
     if a.smpi_build:
         cmd += ["--smpi-build", a.smpi_build]
+    if a.burst_charge:
+        cmd += ["--burst-charge", a.burst_charge]
     cmd += ["--", "run", a.case, "--quiet", "--overwrite", "--set", f"run.steps={a.steps}",
             "--set", f"partition.strategy={strategy}", "--out", folder]
     for kv in case_sets(a):
@@ -143,6 +147,10 @@ def run_one(a, strategy, ranks, folder):
     row = {"strategy": strategy, "ranks": ranks,
            "step_s_simulated": rep["run"]["wall_s"] / rep["run"]["steps"],
            "simulation_wall_s": float(m.group(1)), "simulation_peak_mib": float(m.group(2))}
+    # what smpi_run.py subtracted from each burst (the charge of an empty burst; absent in logs
+    # of simulations made before it did)
+    b = re.search(r"burst charge subtracted ([0-9.]+) us", text)
+    row["burst_charge_us"] = float(b.group(1)) if b else ""
     for k in SHARES:
         row["share_" + k] = rep["fractions"].get(k, 0.0)
     # grouped as the model groups them: its DEM share is the DEM work and the ghost updates
@@ -168,6 +176,8 @@ def main():
                     metavar="OVERLAP", help="the bed starts dense and in contact (dense_bed.py; "
                     "neighbours overlap by OVERLAP of a diameter, default 0.01)")
     ap.add_argument("--smpi-build", help="the SMPI build folder (default: smpi_run.py's)")
+    ap.add_argument("--burst-charge", help="passed to smpi_run.py: measured (its default), none "
+                    "(SMPI's own charge of each burst) or seconds to subtract from each burst")
     ap.add_argument("--resume", action="store_true", help="keep the points of an earlier run "
                     "of this command into the same --out (their report.json and .smpi.log): a "
                     "long sweep goes on where it stopped")
