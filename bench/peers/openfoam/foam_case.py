@@ -220,7 +220,8 @@ solvers
     p      {{ solver GAMG; tolerance {tol:g}; relTol {p_reltol:g}; smoother GaussSeidel; }}
     pFinal {{ $p; relTol 0; }}
     U.air  {{ solver smoothSolver; smoother symGaussSeidel; tolerance 1e-05; relTol {u_rel:g}; }}
-    U.airFinal {{ $U.air; relTol 0; }}
+    // written out: a macro naming U.air would read the entry air of a dictionary U
+    U.airFinal {{ solver smoothSolver; smoother symGaussSeidel; tolerance 1e-05; relTol 0; }}
     "kinematicCloud:theta.*" {{ solver GAMG; tolerance 1e-06; relTol 0;
                                smoother GaussSeidel; }}
 }}

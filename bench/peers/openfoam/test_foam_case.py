@@ -92,6 +92,14 @@ def main():
         fb0 = write("fbed", os.path.join(tmp, "fb0"), "--p-reltol", "0", "--n-correctors", "1")
         check("fbed --p-reltol 0 --n-correctors 1: relTol 0, 1 corrector",
               "relTol 0;" in solver(fb0, "p") and re.search(r"nCorrectors\s+1;", fb0))
+        # the final momentum solve (PIMPLE's last iteration reads U.airFinal) a complete entry;
+        # a macro with a dot ($U.air) is read as a sub-dictionary's entry, and DPMFoam stops
+        for text, label in ((fb, "tutorial"), (fb0, "reltol 0")):
+            fin = solver(text, "U.airFinal")
+            check(f"fbed ({label}): U.airFinal names its solver, relTol 0",
+                  "solver smoothSolver;" in fin and "relTol 0;" in fin)
+            check(f"fbed ({label}): no macro with a dot in fvSolution",
+                  re.search(r"\$[A-Za-z]+\.", text) is None)
 
         # rounds of two invocations merged (--append), the summary min / median / max
         out = os.path.join(tmp, "res")
