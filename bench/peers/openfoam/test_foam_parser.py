@@ -28,9 +28,9 @@ def check(what, ok):
 
 
 def foam_env():
-    """The environment in which foamDictionary runs, or None when OpenFOAM is not installed."""
-    if shutil.which("foamDictionary"):
-        return dict(os.environ)
+    """The environment in which foamDictionary runs (OpenFOAM's bashrc sourced: its binaries
+    need WM_PROJECT_DIR and the etc/ files even when they are on PATH), or None when OpenFOAM is
+    not installed."""
     for rc in (os.environ.get("FOAM_BASHRC"), "/usr/share/openfoam/etc/bashrc",
                "/usr/lib/openfoam/openfoam/etc/bashrc"):
         if not rc or not os.path.exists(rc):
@@ -40,6 +40,8 @@ def foam_env():
         env = dict(kv.split("=", 1) for kv in out.stdout.decode().split("\0") if "=" in kv)
         if shutil.which("foamDictionary", path=env.get("PATH", "")):
             return env
+    if shutil.which("foamDictionary") and os.environ.get("WM_PROJECT_DIR"):
+        return dict(os.environ)  # an environment set up by the user
     return None
 
 
