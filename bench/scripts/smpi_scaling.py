@@ -125,6 +125,8 @@ def run_one(a, strategy, ranks, folder):
         cmd += ["--smpi-build", a.smpi_build]
     if a.burst_charge:
         cmd += ["--burst-charge", a.burst_charge]
+    if a.real_build:
+        cmd += ["--real-build", a.real_build]
     cmd += ["--", "run", a.case, "--quiet", "--overwrite", "--set", f"run.steps={a.steps}",
             "--set", f"partition.strategy={strategy}", "--out", folder]
     for kv in case_sets(a):
@@ -208,6 +210,8 @@ def main():
     ap.add_argument("--smpi-build", help="the SMPI build folder (default: smpi_run.py's)")
     ap.add_argument("--burst-charge", help="passed to smpi_run.py: measured (its default), none "
                     "(SMPI's own charge of each burst) or seconds to subtract from each burst")
+    ap.add_argument("--real-build", help="passed to smpi_run.py: the Open MPI build whose "
+                    "bench_mpi_calls gives a real call's cost (default: smpi_run.py's, build/)")
     ap.add_argument("--resume", action="store_true", help="keep the points of an earlier run "
                     "of this command into the same --out (their report.json and .smpi.log): a "
                     "long sweep goes on where it stopped")
