@@ -5,10 +5,13 @@
 //   test      one MPI_Test of a receive that has not arrived
 //   exchange  one MPI_Sendrecv of a double around the ring of ranks (the real counterpart of
 //             smpi_empty_bursts, whose ranks do the same under the simulator)
-// Each is the median over REPEATS (default 9) timings of ITERS calls (default 100000); rank 0
+// iprobe and test are the thread CPU time of ITERS calls (default 100000; a call that polls does
+// not wait, and a shared machine's time slices are not the call's), the least of REPEATS
+// (default 9) timings; exchange is wall time (it waits for the neighbour), the median. Rank 0
 // prints one JSON line: {"ranks": P, "iprobe_s": ..., "test_s": ..., "exchange_s": ...}.
 //   mpirun -n 2 build/bench/bench_mpi_calls [ITERS] [REPEATS]
 #include <mpi.h>
+#include <time.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -16,6 +19,16 @@
 #include <vector>
 
 namespace {
+
+double cpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+double least(const std::vector<double>& v) {
+  return *std::min_element(v.begin(), v.end());
+}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -42,30 +55,30 @@ int main(int argc, char** argv) {
     // MPI_Iprobe on a tag nobody sends
     MPI_Barrier(MPI_COMM_WORLD);
     int flag = 0;
-    double t0 = MPI_Wtime();
+    double t0 = cpuSeconds();
     for (long i = 0; i < iters; ++i)
       MPI_Iprobe(MPI_ANY_SOURCE, 99, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
-    iprobe.push_back((MPI_Wtime() - t0) / static_cast<double>(iters));
+    iprobe.push_back((cpuSeconds() - t0) / static_cast<double>(iters));
     // MPI_Test of a receive whose send comes after the loop
     double in = 0, out = rank;
     MPI_Request req;
     MPI_Irecv(&in, 1, MPI_DOUBLE, from, 98, MPI_COMM_WORLD, &req);
     MPI_Barrier(MPI_COMM_WORLD);
-    t0 = MPI_Wtime();
+    t0 = cpuSeconds();
     for (long i = 0; i < iters; ++i) MPI_Test(&req, &flag, MPI_STATUS_IGNORE);
-    test.push_back((MPI_Wtime() - t0) / static_cast<double>(iters));
+    test.push_back((cpuSeconds() - t0) / static_cast<double>(iters));
     MPI_Send(&out, 1, MPI_DOUBLE, peer, 98, MPI_COMM_WORLD);
     MPI_Wait(&req, MPI_STATUS_IGNORE);
     // the ring of smpi_empty_bursts
     MPI_Barrier(MPI_COMM_WORLD);
     const long ring = std::max(1L, iters / 10);
-    t0 = MPI_Wtime();
+    const double w0 = MPI_Wtime();
     for (long i = 0; i < ring; ++i)
       MPI_Sendrecv(&out, 1, MPI_DOUBLE, peer, 0, &in, 1, MPI_DOUBLE, from, 0, MPI_COMM_WORLD,
                    MPI_STATUS_IGNORE);
-    exchange.push_back((MPI_Wtime() - t0) / static_cast<double>(ring));
+    exchange.push_back((MPI_Wtime() - w0) / static_cast<double>(ring));
   }
-  double mine[3] = {median(iprobe), median(test), median(exchange)}, worst[3];
+  double mine[3] = {least(iprobe), least(test), median(exchange)}, worst[3];
   MPI_Reduce(mine, worst, 3, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
   if (rank == 0)
     std::printf("{\"ranks\": %d, \"iprobe_s\": %.4e, \"test_s\": %.4e, \"exchange_s\": %.4e}\n",

@@ -165,9 +165,10 @@ TEST(FvPressureReuse, EverySolveMeetsTheToleranceWithFewerSetups) {
   const double rel = relativeDiff(reuse, every);
   EXPECT_LE(rel, 1e-7) << "fields of setup_interval 8 against 1";
   if (Comm::world().rank() == 0)
-    std::printf("24 steps: %lld set-ups (interval 8) against %lld; worst continuity %.2e of the "
-                "flux scale; fields differ by %.2e\n",
-                reuse.setups(), every.setups(), worst, rel);
+    std::printf(
+        "24 steps: %lld set-ups (interval 8) against %lld; worst continuity %.2e of the "
+        "flux scale; fields differ by %.2e\n",
+        reuse.setups(), every.setups(), worst, rel);
 }
 
 TEST(FvPressureReuse, IterationGrowthAsksForASetup) {
@@ -206,14 +207,14 @@ TEST(FvPressureReuse, RestoredStateContinuesBitwise) {
                         });
   std::size_t next = 0;
   bool sawSetupFields = false;
-  fv::forEachStateField(b.solver, [&](const fv::FluidSolver::StateField& sf,
-                                      Field3<double>* const* p) {
-    if (std::string(sf.name) == "eps_setup") sawSetupFields = true;
-    for (int c = 0; c < sf.components; ++c) {
-      const auto src = from[next++]->data();
-      std::copy(src.begin(), src.end(), p[c]->data().begin());
-    }
-  });
+  fv::forEachStateField(b.solver,
+                        [&](const fv::FluidSolver::StateField& sf, Field3<double>* const* p) {
+                          if (std::string(sf.name) == "eps_setup") sawSetupFields = true;
+                          for (int c = 0; c < sf.components; ++c) {
+                            const auto src = from[next++]->data();
+                            std::copy(src.begin(), src.end(), p[c]->data().begin());
+                          }
+                        });
   EXPECT_TRUE(sawSetupFields);
   ASSERT_EQ(next, from.size());
   b.solver.restoreState(a.solver.counters());
