@@ -23,6 +23,7 @@ import json
 import os
 import re
 import sys
+import tempfile
 
 
 def last_step(out_dir, series):
@@ -32,6 +33,21 @@ def last_step(out_dir, series):
         if m:
             steps.append(int(m.group(1)))
     return max(steps) if steps else None
+
+
+def png_target_problem(png):
+    """Why PNG cannot be written (what is there is not a regular file, or is not a PNG); None
+    when it can: coloc replaces only a picture of its own kind, never through a link."""
+    if not os.path.lexists(png):
+        return None
+    if os.path.islink(png) or not os.path.isfile(png):
+        return "'%s' exists and is not a regular file (a link, a folder, a FIFO or a device): " \
+            "not replaced; remove it or give another --png" % png
+    with open(png, "rb") as f:
+        if f.read(8) != b"\x89PNG\r\n\x1a\n":
+            return "'%s' exists and is not a PNG picture: not replaced; remove it or give " \
+                "another --png" % png
+    return None
 
 
 def vertical_axis(report, length):
@@ -85,6 +101,17 @@ def main():
         print("snapshot.py: no fields_*.h5 in '%s'" % args.out_dir, file=sys.stderr)
         return 1
     fpath = os.path.join(args.out_dir, "fields_%06d.h5" % step)
+    if not os.path.isfile(fpath):
+        have = last_step(args.out_dir, "fields")
+        print("snapshot.py: no output of step %d in '%s' (%s)" % (
+            step, args.out_dir, "the last is step %d" % have if have is not None
+            else "no fields_*.h5 at all"), file=sys.stderr)
+        return 1
+    png = args.png or os.path.join(args.out_dir, "snapshot.png")
+    why = png_target_problem(png)
+    if why:
+        print("snapshot.py: %s" % why, file=sys.stderr)
+        return 1
     with h5py.File(fpath, "r") as f:
         origin = np.array(f.attrs["origin"], dtype=float)
         spacing = np.array(f.attrs["spacing"], dtype=float)
@@ -195,13 +222,26 @@ def main():
             len(boxes), strategy, "; particles coloured by their rank (left)" if px is not None
             else "")
     fig.suptitle("%s: step %d, t = %.6g s\n%s" % (case, step, time, sub), fontsize=10)
-    png = args.png or os.path.join(args.out_dir, "snapshot.png")
     # where the picture comes from: the run's report.json provenance (else the fields file's)
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import provenance
     has = provenance.of_report(report) is not None
     provenance.stamp(fig, reports=[report] if has else [], data_files=[] if has else [fpath])
-    provenance.savefig(fig, png, dpi=110, bbox_inches="tight", pad_inches=0.1)
+    # written beside it under a unique name and renamed (coloc's rule for the files it writes:
+    # never through a symbolic link, never over anything but a regular file)
+    fd, tmp = tempfile.mkstemp(prefix=os.path.basename(png) + ".", suffix=".tmp.png",
+                               dir=os.path.dirname(os.path.abspath(png)))
+    os.close(fd)
+    try:
+        provenance.savefig(fig, tmp, dpi=110, bbox_inches="tight", pad_inches=0.1)
+        why = png_target_problem(png)
+        if why:
+            raise OSError(why)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, png)
+    except BaseException:
+        os.unlink(tmp)
+        raise
     print("snapshot.py: wrote %s%s" % (png, " (cropped at %s = %.4g m of %.4g m)" % (
         names[up], top, ext[3]) if top < ext[3] else ""))
     return 0

@@ -37,8 +37,8 @@ void declareRunConfig(Schema& s) {
              "solve over the run), dp (rho_f (p_bottom - p_top) between the lowest and the "
              "highest layer of cells along gravity, Pa), wall_per_step (s, since the last "
              "row), steps_per_s (over this run), left (estimated wall seconds to the end); "
-             "'-' where the run has no such value (docs/output.md)",
-             progressColumnNames());
+             "'-' where the run has no such value (docs/output.md); each at most once",
+             progressColumnNames(), /*unique=*/true);
   s.boolean("run.timer_sync", false,
             "timed barriers before the fluid's halo after the momentum predictor and before "
             "the DEM's rebuild vote in every sub-step: a rank's wait for the slowest one is "

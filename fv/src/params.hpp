@@ -21,6 +21,9 @@ struct HeatParams {
   double initial = 0;       // fluid.initial_temperature (K)
 };
 
+/// The most sub-steps of the explicit energy update in one fluid step (fv/src/heat.cpp).
+inline constexpr long long kMaxHeatSubsteps = 100000;
+
 struct FluidParams {
   double nu = 0;          // fluid.nu (m^2/s)
   double dtFixed = 0;     // fluid.dt (s): the step, or the largest adaptive step
