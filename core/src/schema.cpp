@@ -248,12 +248,14 @@ Schema& Schema::numberList(const std::string& path, std::optional<std::vector<do
 }
 
 Schema& Schema::nameList(const std::string& path, std::vector<std::string> def,
-                         const std::string& help, std::vector<std::string> choices, bool unique) {
+                         const std::string& help, std::vector<std::string> choices,
+                         bool dottedNames, bool unique) {
   KeySpec s;
   s.kind = KeyKind::NameList;
   s.unique = unique;
   s.defaultValue = def;
   s.choices = std::move(choices);
+  s.dottedNames = dottedNames;
   s.help = help;
   insert(path, std::move(s));
   return *this;
@@ -422,8 +424,10 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         for (std::size_t i = 0; i < names.size(); ++i) {
           const auto& n = names[i];
           if (!spec.choices.empty() &&
-              std::find(spec.choices.begin(), spec.choices.end(), n) == spec.choices.end())
-            throw ConfigError(path, "unknown name '" + n + "', expected some of: " + allowed);
+              std::find(spec.choices.begin(), spec.choices.end(), n) == spec.choices.end() &&
+              !(spec.dottedNames && n.find('.') != std::string::npos))
+            throw ConfigError(path, "unknown name '" + n + "', expected some of: " + allowed +
+                                        (spec.dottedNames ? ", or a key path with a dot" : ""));
           if (spec.unique &&
               std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(i), n) !=
                   names.begin() + static_cast<std::ptrdiff_t>(i))
@@ -473,6 +477,7 @@ std::string Schema::describe(const std::string& prefix) const {
     if (!spec.choices.empty()) {
       os << (spec.kind == KeyKind::NameList ? ", each one of" : ", one of");
       for (auto& c : spec.choices) os << " " << c;
+      if (spec.dottedNames) os << " or a key path with a dot";
     }
     os << ")\n      " << spec.help << "\n";
     for (const auto& [type, sch] : spec.items) {

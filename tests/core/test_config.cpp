@@ -167,7 +167,7 @@ TEST(Config, OptionalKeysHaveNoSentinel) {
   Schema s;
   s.optionalNumber("wall.temperature", "K", Range::between(0.0, 1e6));
   s.number("wall.other", 1.0, "x");
-  s.nameList("run.columns", {"a"}, "columns", {"a", "b"}, /*unique=*/true);
+  s.nameList("run.columns", {"a"}, "columns", {"a", "b"}, /*dottedNames=*/false, /*unique=*/true);
   const auto absent = Config::fromText("{}", "case.json", {}, s);
   EXPECT_FALSE(absent.has("wall.temperature"));
   EXPECT_FALSE(absent.optionalNumber("wall.temperature").has_value());

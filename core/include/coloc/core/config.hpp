@@ -69,6 +69,7 @@ struct KeySpec {
   bool unique = false;               // NameList: each name at most once
   Range range;                       // numbers, integers, and each component of vectors
   std::vector<std::string> choices;  // strings: allowed values (empty: any)
+  bool dottedNames = false;          // NameList: names with a '.' pass too (the caller checks them)
   std::string help;
   std::shared_ptr<Schema> object;                        // Object
   std::map<std::string, std::shared_ptr<Schema>> items;  // List (by "type", or "" for any)
@@ -95,9 +96,11 @@ class Schema {
                      const std::string& help, Range r = Range::any());
   /// A non-empty list of names, each one of `choices`: a JSON list of strings, or one string of
   /// names separated by commas or spaces (`--set run.progress_columns=step,time`). Resolved to
-  /// the list. `unique`: a name given twice is refused (a list of columns, each shown once).
+  /// the list. With `dottedNames`, a name holding a '.' passes too (a key path the caller
+  /// checks, e.g. a report.json key as a progress column). `unique`: a name given twice is
+  /// refused (a list of columns, each shown once).
   Schema& nameList(const std::string& path, std::vector<std::string> def, const std::string& help,
-                   std::vector<std::string> choices, bool unique = false);
+                   std::vector<std::string> choices, bool dottedNames = false, bool unique = false);
   /// An optional object whose keys depend on its "type" (e.g. a boundary condition).
   Schema& variant(const std::string& path, std::map<std::string, Schema> byType,
                   const std::string& defaultType, const std::string& help);
