@@ -17,7 +17,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 common=(--platform paper --smpi-build "$ROOT/build-smpi" --real-build "$ROOT/build"
         --coloc "$ROOT/build/coloc" --resume)
 c2=$ROOT/bench/cases/case2.json c3=$ROOT/bench/cases/case3.json
-dense=$(python3 "$S/dense_bed.py" "$c3")
+dense=$(/usr/bin/python3 "$S/dense_bed.py" "$c3")
 all=uniform,balanced,tiled,independent
 log() { echo "$(date -u +%H:%M:%S) $*" | tee -a "$OUT/sweep.log"; }
 c2run() { python3 "$S/smpi_scaling.py" "$c2" "${common[@]}" --steps 3 --model "$OUT/case2-np1/report.json" "$@" >> "$OUT/sweep.log" 2>&1; }
