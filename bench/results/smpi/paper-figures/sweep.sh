@@ -20,8 +20,8 @@ c2=$ROOT/bench/cases/case2.json c3=$ROOT/bench/cases/case3.json
 dense=$(/usr/bin/python3 "$S/dense_bed.py" "$c3")
 all=uniform,balanced,tiled,independent
 log() { echo "$(date -u +%H:%M:%S) $*" | tee -a "$OUT/sweep.log"; }
-c2run() { python3 "$S/smpi_scaling.py" "$c2" "${common[@]}" --steps 3 --model "$OUT/case2-np1/report.json" "$@" >> "$OUT/sweep.log" 2>&1; }
-c3run() { python3 "$S/smpi_scaling.py" "$c3" --dense-bed "${common[@]}" --steps 1 --model "$OUT/case3-np1/report.json" "$@" >> "$OUT/sweep.log" 2>&1; }
+c2run() { /usr/bin/python3 "$S/smpi_scaling.py" "$c2" "${common[@]}" --steps 3 --model "$OUT/case2-np1/report.json" "$@" >> "$OUT/sweep.log" 2>&1; }
+c3run() { /usr/bin/python3 "$S/smpi_scaling.py" "$c3" --dense-bed "${common[@]}" --steps 1 --model "$OUT/case3-np1/report.json" "$@" >> "$OUT/sweep.log" 2>&1; }
 # the model's calibration: a real 1-rank run of each case, this build
 if [[ ! -f $OUT/case2-np1/report.json ]]; then
   log "calibration case 2"
