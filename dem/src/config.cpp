@@ -61,6 +61,16 @@ void declareConfig(Schema& s) {
            "Verlet skin as a fraction of the largest particle diameter; lists are rebuilt when a "
            "particle moved more than skin/2; at most 10",
            Range::openClosed(0.0, 10.0));
+  s.number("particles.prune_margin", 0.05,
+           "gap below which a Verlet-list entry stays in the pruned inner list, as a fraction of "
+           "the largest particle diameter: the force passes visit only those entries until any "
+           "two particles may have closed it (bit for bit the same results); 0: no inner list",
+           Range::between(0.0, 10.0));
+  s.string("particles.force_isa", "widest",
+           "instruction set of the force pass's distance tests: widest (AVX-512 where the CPU has "
+           "it, else portable), portable (entry by entry, the build's target), avx512 (refused on "
+           "a CPU without it); the same results, bit for bit",
+           {"widest", "portable", "avx512"});
   s.string("particles.contact_model", "hertz_mindlin",
            "hertz_mindlin: Hertz normal + Mindlin no-slip tangential with history (LIGGGHTS "
            "formulas); linear: spring-dashpot with history",

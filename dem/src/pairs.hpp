@@ -50,6 +50,8 @@ struct PairInputs {
   double dt;
 };
 
+namespace {  // NOLINT(google-build-namespaces,cert-dcl59-cpp): one copy per instruction set
+
 /// Pass 2 over entries [0, ch.m) of the chunk. Wall entries are computed too, on harmless
 /// stand-in values (partner = holder, dx = (1, 0, 0)), and ignored by pass 3. Single: one
 /// material (every coef is 0), the coefficients are broadcast instead of gathered.
@@ -98,4 +100,5 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
   }
 }
 
+}  // namespace
 }  // namespace coloc::dem::detail
