@@ -80,7 +80,7 @@ struct Row {
   double xi[3], ri;  // its position and radius
   int coefRow;       // material_i * nMat (0 with one material)
   int e0, e1;        // its entries
-  unsigned keep;      // the inner list's mask of the row (neighbours.hpp: KeepMask)
+  unsigned keep;     // the inner list's mask of the row (neighbours.hpp: KeepMask)
 };
 
 template <Model M, bool Rolling, bool Heat, class Rows>
@@ -128,7 +128,7 @@ class ForcePass {
       if (e0 == e1 || (inner_ && keep_[q] == 0 && e1 - e0 <= kKeepBits)) continue;
       const auto i = static_cast<std::size_t>(items_[q]);
       const Body& bi = B_[i];
-      const Row row{i,    {bi.x[0], bi.x[1], bi.x[2]}, bi.r, single_ ? 0 : mat_[i] * nMat_, e0,
+      const Row row{i,  {bi.x[0], bi.x[1], bi.x[2]}, bi.r, single_ ? 0 : mat_[i] * nMat_, e0,
                     e1, inner_ ? keep_[q] : ~0u};
       const unsigned kept = Rows::row(*this, row);
       if (prune_) keep_[q] = static_cast<KeepMask>(kept);
@@ -165,8 +165,7 @@ class ForcePass {
   /// above.
   bool gatherWall(int k, const Row& r, int j, bool& kept) {
     const int w = -1 - j, d = w / 2, s = w % 2;
-    const double dist =
-        s == 0 ? r.xi[d] - bins_.origin[d] : bins_.origin[d] + bins_.L[d] - r.xi[d];
+    const double dist = s == 0 ? r.xi[d] - bins_.origin[d] : bins_.origin[d] + bins_.L[d] - r.xi[d];
     const bool touch = !(r.ri - dist <= 0);
     kept = !(r.ri - dist <= -margin_);
     ch_.u[k] = static_cast<int>(r.i);  // stand-in values for pass 2 (see pairChunk)
@@ -214,10 +213,13 @@ class ForcePass {
 
   /// Passes 2 and 3 over the chunk gathered so far.
   void flush() {
+    // the chunk's histories (pass 2 gathers them, pass 3 writes them): all requested now, so
+    // that the later lanes' lines arrive while the first are computed
+    for (int k = 0; k < ch_.m; ++k) __builtin_prefetch(in_.hS + 3 * ch_.slot[k], 1);
     if (single_)
-      pairChunk<M, Rolling, true>(in_, update_, ch_);
+      pairChunk<M, Rolling, true, Rows::kHolderInChunk>(in_, update_, ch_);
     else
-      pairChunk<M, Rolling, false>(in_, update_, ch_);
+      pairChunk<M, Rolling, false, Rows::kHolderInChunk>(in_, update_, ch_);
     for (int k = 0; k < ch_.m; ++k) {
       if (ch_.wall[k] >= 0)
         wallContact(k);
@@ -323,7 +325,8 @@ class ForcePass {
 /// unconditional, the count advances by the test), a contact that starts or ends takes or frees
 /// its slot; a full chunk is flushed. Returns the row's keep mask (used by pruning passes).
 struct ScalarRows {
-  static constexpr std::size_t kRowsAhead = 0;  // (entry by entry, kAhead below)
+  static constexpr std::size_t kRowsAhead = 0;   // (entry by entry, kAhead below)
+  static constexpr bool kHolderInChunk = false;  // pass 2 gathers the holder's values
   template <class FP>
   static unsigned row(FP& f, const Row& r) {
     constexpr int kAhead = 24;

@@ -20,6 +20,8 @@ namespace {  // NOLINT(google-build-namespaces,cert-dcl59-cpp)
 struct Avx512Rows {
   // the partners' lines of the row this far ahead are prefetched (ForcePass::prefetchRow)
   static constexpr std::size_t kRowsAhead = 6;
+  // the holder's r, m, v, omega stored beside its pairs (PairChunk::hold), not gathered in pass 2
+  static constexpr bool kHolderInChunk = true;
   template <class FP>
   static unsigned row(FP& f, const Row& r) {
     PairChunk& ch = f.ch_;
@@ -33,6 +35,9 @@ struct Avx512Rows {
     // line u at base + 8 u: x, y, z, r, v, m (pairs.hpp: Body)
     const auto* const base = reinterpret_cast<const double*>(f.B_);
     unsigned kept = 0;
+    const Body& bi = f.B_[r.i];
+    const double hv[8] = {
+        bi.r, bi.m, bi.v[0], bi.v[1], bi.v[2], f.in_.w[0][r.i], f.in_.w[1][r.i], f.in_.w[2][r.i]};
     for (int w = r.e0; w < r.e1; w += 8) {
       const int k0 = w - r.e0;
       auto live = static_cast<__mmask8>(r.e1 - w >= 8 ? 0xff : (1u << (r.e1 - w)) - 1);
@@ -73,11 +78,13 @@ struct Avx512Rows {
       _mm512_storeu_pd(ch.dx[1] + m, _mm512_maskz_compress_pd(touch, dy));
       _mm512_storeu_pd(ch.dx[2] + m, _mm512_maskz_compress_pd(touch, dz));
       _mm512_storeu_pd(ch.r2 + m, _mm512_maskz_compress_pd(touch, r2));
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(ch.u + m), _mm256_maskz_compress_epi32(touch, j));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(ch.u + m),
+                          _mm256_maskz_compress_epi32(touch, j));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(ch.slot + m),
                           _mm256_maskz_compress_epi32(touch, s));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(ch.i + m), holder);
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(ch.wall + m), noWall);
+      for (int c = 0; c < 8; ++c) _mm512_storeu_pd(ch.hold[c] + m, _mm512_set1_pd(hv[c]));
       if (!f.single_) {
         const __m256i mu = _mm256_mmask_i32gather_epi32(izero, pair, j, f.mat_, 4);
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(ch.coef + m),
