@@ -135,7 +135,8 @@ TEST(DemForcePaths, EveryPathGivesTheSameBits) {
       EXPECT_EQ(std::memcmp(r.result.data(), ref.result.data(), r.result.size() * sizeof(double)),
                 0);
       EXPECT_EQ(r.rebuilds, ref.rebuilds);
-      if (coloc::Comm::world().isRoot()) std::printf("%s %.2f: %lld prunes\n", isa.c_str(), margin, r.prunes);
+      if (coloc::Comm::world().isRoot())
+        std::printf("%s %.2f: %lld prunes\n", isa.c_str(), margin, r.prunes);
       if (margin > 0) {
         // pruned at every rebuild and in between (the margin closes before the skin), yet the
         // inner list served most passes
