@@ -41,10 +41,10 @@ struct ContactLaw {
   std::vector<PairCoeff> wall;  // [a]
 };
 
-/// Which build of the force pass runs (particles.force_isa): the widest the CPU has, the
-/// build's own target (pass 1 entry by entry), or AVX-512 (pass 1 eight entries at a time). All
-/// give the same bits.
-enum class ForceIsa { Widest, Portable, Avx512 };
+/// Which build of the force pass runs (particles.force_isa): the build's own target (pass 1
+/// entry by entry), AVX-512 (pass 1 eight entries of a row at a time), or the widest the CPU
+/// has. All give the same bits.
+enum class ForceIsa { Widest, Scalar, Avx512 };
 
 struct HeatPass;  // heat.hpp
 
@@ -90,7 +90,7 @@ class ContactForces {
   PairChunk chunk_;
   std::vector<Body> body_;
   bool packed_ = false;
-  ForceIsa isa_ = ForceIsa::Portable;
+  ForceIsa isa_ = ForceIsa::Scalar;
   ContactTally tally_;
 };
 

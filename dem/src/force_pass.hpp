@@ -140,8 +140,9 @@ class ForcePass {
 
   // ---- used by the Rows policies (pass 1) ----
 
-  /// Pass 1 of a particle entry (partner j) at chunk position k: whether it touches; `kept`:
-  /// whether its gap is below the prune margin (or it touches).
+  /// Pass 1 of a particle entry (partner j) at chunk position k: whether it touches; `kept`
+  /// (Prune): whether its gap is below the prune margin (or it touches).
+  template <bool Prune>
   bool gatherPair(int k, const Row& r, int j, bool& kept) {
     const auto u = static_cast<std::size_t>(j);
     const Body& bu = B_[u];
@@ -149,8 +150,10 @@ class ForcePass {
     const double r2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
     const double rs = r.ri + bu.r;
     const bool touch = !(r2 >= rs * rs);
-    const double rm = rs + margin_;
-    kept = !(r2 >= rm * rm);
+    if constexpr (Prune) {
+      const double rm = rs + margin_;
+      kept = !(r2 >= rm * rm);
+    }
     // the partner's lines that passes 2 and 3 read and write, fetched a chunk ahead
     prefetchPartner(u);
     ch_.u[k] = j;
@@ -161,13 +164,14 @@ class ForcePass {
     return touch;
   }
 
-  /// Pass 1 of a wall entry (code j < 0) at chunk position k: whether it touches; `kept` as
-  /// above.
+  /// Pass 1 of a wall entry (code j < 0) at chunk position k: whether it touches; `kept`
+  /// (Prune) as above.
+  template <bool Prune>
   bool gatherWall(int k, const Row& r, int j, bool& kept) {
     const int w = -1 - j, d = w / 2, s = w % 2;
     const double dist = s == 0 ? r.xi[d] - bins_.origin[d] : bins_.origin[d] + bins_.L[d] - r.xi[d];
     const bool touch = !(r.ri - dist <= 0);
-    kept = !(r.ri - dist <= -margin_);
+    if constexpr (Prune) kept = !(r.ri - dist <= -margin_);
     ch_.u[k] = static_cast<int>(r.i);  // stand-in values for pass 2 (see pairChunk)
     ch_.coef[k] = 0;
     ch_.wall[k] = w;
@@ -213,9 +217,6 @@ class ForcePass {
 
   /// Passes 2 and 3 over the chunk gathered so far.
   void flush() {
-    // the chunk's histories (pass 2 gathers them, pass 3 writes them): all requested now, so
-    // that the later lanes' lines arrive while the first are computed
-    for (int k = 0; k < ch_.m; ++k) __builtin_prefetch(in_.hS + 3 * ch_.slot[k], 1);
     if (single_)
       pairChunk<M, Rolling, true, Rows::kHolderInChunk>(in_, update_, ch_);
     else
@@ -332,13 +333,15 @@ struct ScalarRows {
     constexpr int kAhead = 24;
     const int eLast = std::max(f.rowStart_[f.nAll_] - 1, 0);
     unsigned kept = 0;
-    const auto entry = [&](int e) {
+    // (always inlined: called from several loops, GCC otherwise makes it a function call an entry)
+    const auto entry = [&]<bool Prune>(int e) __attribute__((always_inline)) {
       const int j = f.nbrs_[e];
       const int k = f.ch_.m;
       // the partner of the entry kAhead on, whose line the distance test will read
       __builtin_prefetch(f.B_ + std::max(f.nbrs_[std::min(e + kAhead, eLast)], 0));
-      bool kb;
-      const bool touch = j >= 0 ? f.gatherPair(k, r, j, kb) : f.gatherWall(k, r, j, kb);
+      bool kb = false;
+      const bool touch = j >= 0 ? f.template gatherPair<Prune>(k, r, j, kb)
+                                : f.template gatherWall<Prune>(k, r, j, kb);
       if (touch != (f.sl_[e] >= 0)) f.fixSlot(e, touch);
       f.ch_.i[k] = static_cast<int>(r.i);
       f.ch_.slot[k] = f.sl_[e];
@@ -347,13 +350,18 @@ struct ScalarRows {
       if (f.ch_.m == kChunk) f.flush();
       return kb;
     };
-    const int eMask = std::min(r.e1, r.e0 + kKeepBits);
     if (f.inner_) {
-      for (unsigned b = r.keep; b != 0; b &= b - 1) entry(r.e0 + std::countr_zero(b));
+      const int eMask = std::min(r.e1, r.e0 + kKeepBits);
+      for (unsigned b = r.keep; b != 0; b &= b - 1)
+        entry.template operator()<false>(r.e0 + std::countr_zero(b));
+      for (int e = eMask; e < r.e1; ++e) entry.template operator()<false>(e);
+    } else if (f.prune_) {
+      for (int e = r.e0; e < r.e1; ++e)
+        if (const bool kb = entry.template operator()<true>(e); e - r.e0 < kKeepBits)
+          kept |= static_cast<unsigned>(kb) << (e - r.e0);
     } else {
-      for (int e = r.e0; e < eMask; ++e) kept |= static_cast<unsigned>(entry(e)) << (e - r.e0);
+      for (int e = r.e0; e < r.e1; ++e) entry.template operator()<false>(e);
     }
-    for (int e = eMask; e < r.e1; ++e) entry(e);
     return kept;
   }
 };

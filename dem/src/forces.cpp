@@ -27,7 +27,7 @@ ContactTally detail::forcePassBuild(const ForcePassArgs& a) {
 
 bool ContactForces::selectIsa(ForceIsa want) {
   const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-  if (want == ForceIsa::Widest) want = avx512 ? ForceIsa::Avx512 : ForceIsa::Portable;
+  if (want == ForceIsa::Widest) want = avx512 ? ForceIsa::Avx512 : ForceIsa::Scalar;
   if (want == ForceIsa::Avx512 && !avx512) return false;
   isa_ = want;
   return true;

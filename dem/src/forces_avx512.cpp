@@ -98,8 +98,9 @@ struct Avx512Rows {
       // the row's walls, after its pairs, entry by entry
       for (unsigned b = walls; b != 0; b &= b - 1) {
         const int l = std::countr_zero(b), e = w + l, k = ch.m;
-        bool kb;
-        const bool t = f.gatherWall(k, r, f.nbrs_[e], kb);
+        bool kb = false;
+        const bool t = f.prune_ ? f.template gatherWall<true>(k, r, f.nbrs_[e], kb)
+                                : f.template gatherWall<false>(k, r, f.nbrs_[e], kb);
         if (t != (f.sl_[e] >= 0)) f.fixSlot(e, t);
         ch.i[k] = static_cast<int>(r.i);
         ch.slot[k] = f.sl_[e];

@@ -1,5 +1,5 @@
 // The force pass's paths give the same bits (issue 48; docs/dem.md, "Force pass"):
-//  - pass 1 entry by entry (particles.force_isa = portable) and eight entries at a time on
+//  - pass 1 entry by entry (particles.force_isa = scalar) and eight entries at a time on
 //    AVX-512 (avx512, where the CPU has it), each with the pruned inner list off
 //    (particles.prune_margin = 0) and on with two margins: after 300 sub-steps of a bidisperse
 //    dense gas of two materials (rolling resistance on one) between two walls, with rebuilds,
@@ -120,15 +120,15 @@ Outcome runVariant(const std::string& isa, double margin, int steps) {
 
 TEST(DemForcePaths, EveryPathGivesTheSameBits) {
   constexpr int kSteps = 300;
-  const Outcome ref = runVariant("portable", 0, kSteps);
+  const Outcome ref = runVariant("scalar", 0, kSteps);
   EXPECT_GE(ref.rebuilds, 2);
   EXPECT_EQ(ref.prunes, 0);
-  std::vector<std::string> isas = {"portable"};
+  std::vector<std::string> isas = {"scalar"};
   if (hasAvx512()) isas.emplace_back("avx512");
   int compared = 0;
   for (const auto& isa : isas)
     for (const double margin : {0.0, 0.05, 0.1}) {
-      if (isa == "portable" && margin == 0) continue;
+      if (isa == "scalar" && margin == 0) continue;
       const Outcome r = runVariant(isa, margin, kSteps);
       SCOPED_TRACE(isa + ", prune_margin " + std::to_string(margin));
       ASSERT_EQ(r.result.size(), ref.result.size());
@@ -150,7 +150,7 @@ TEST(DemForcePaths, EveryPathGivesTheSameBits) {
   EXPECT_EQ(compared, hasAvx512() ? 5 : 2);
   if (coloc::Comm::world().isRoot())
     std::printf(
-        "%d variants equal to the portable pass without pruning (%lld rebuilds; at the end %.2f "
+        "%d variants equal to the scalar pass without pruning (%lld rebuilds; at the end %.2f "
         "contacts and %.1f list entries a particle)\n",
         compared, ref.rebuilds, ref.contacts, ref.neighbours);
 }
@@ -159,7 +159,7 @@ TEST(DemForcePaths, EveryPathGivesTheSameBits) {
 // a heat capacity so large that a sub-step leaves every temperature unchanged, then a frozen
 // sub-step (which runs HeatTransfer::conduct, no force pass) must reproduce the heat rates.
 TEST(DemForcePaths, ConductionInsideTheForcePassEqualsItsOwnPass) {
-  for (const char* isa : {"portable", "widest"}) {
+  for (const char* isa : {"scalar", "widest"}) {
     Case c(gas(isa, 0.05, 1e30));
     for (int s = 0; s < 120; ++s) c.dem->substep();
     const auto T0 = demtest::fieldById(c.p(), c.dec.comm(), kN);

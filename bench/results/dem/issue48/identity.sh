@@ -7,7 +7,7 @@
 #    checkpoint of bench/scripts/contact_bench.py, step 200).
 # The checkpoints' /particles groups (positions, velocities, spins, forces, histories, ...) and,
 # for the coupled case, the fluid's fields are compared with h5diff; `identical` or the first
-# differences are printed. Extra arguments (e.g. --set particles.force_isa=portable) go to the
+# differences are printed. Extra arguments (e.g. --set particles.force_isa=avx512) go to the
 # NEW runs only.
 # usage: identity.sh BASE_COLOC NEW_COLOC BED_CK C3_CK OUT [coloc run arguments for NEW]
 set -u
