@@ -110,8 +110,8 @@ void drawLayouts(const CheckOptions& opts, const Config& cfg, const GlobalGrid& 
                               "): " + opts.commandLine + "  |  " + prov["date"].get<std::string>() +
                               ", " + prov["host"].get<std::string>() + " (" +
                               prov["cpu_model"].get<std::string>() + ")";
-  writeLayoutSvg(opts.drawPath, g, layoutPlane(g, cfg.vec3("gravity")), particlesPerCell, panels,
-                 caption);
+  writeLayoutSvg(opts.drawPath, g, layoutPlane(g, cfg.vec3("gravity"), opts.plane),
+                 particlesPerCell, panels, caption);
   std::printf("coloc check: drew the layouts in %s\n", opts.drawPath.c_str());
 }
 

@@ -12,6 +12,7 @@ struct CheckOptions {
   int ranks = 1;            // the rank count to lay the case out for
   bool verbose = false;     // --cuts: print every strategy's cuts
   std::string drawPath;     // --draw FILE.svg: the layouts drawn (layout_svg.hpp)
+  std::string plane;        // --plane xz|yz|xy: the plane drawn ("": the vertical mid-plane)
   std::string commandLine;  // for the picture's provenance line
 };
 

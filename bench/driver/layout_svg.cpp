@@ -51,7 +51,7 @@ void rect(std::ostringstream& o, const Frame& f, double i0, double i1, double k0
 
 }  // namespace
 
-LayoutPlane layoutPlane(const GlobalGrid& g, const Real3& gravity) {
+LayoutPlane layoutPlane(const GlobalGrid& g, const Real3& gravity, const std::string& plane) {
   LayoutPlane p;
   int up = -1;
   double gmax = 0;
@@ -60,6 +60,23 @@ LayoutPlane layoutPlane(const GlobalGrid& g, const Real3& gravity) {
       gmax = std::fabs(gravity[a]);
       up = a;
     }
+  if (!plane.empty()) {
+    if (plane != "xz" && plane != "yz" && plane != "xy")
+      throw ConfigError("--plane", "'" + plane + "': expected xz, yz or xy (the plane's two axes)");
+    const int a = plane[0] - 'x', b = plane[1] - 'x';
+    p.normal = 3 - a - b;
+    if (up == a || up == b) {  // the vertical axis is in the plane: drawn upwards
+      p.up = up;
+      p.across = up == a ? b : a;
+      p.upIsPlus = gravity[up] < 0;
+    } else {
+      p.up = b;
+      p.across = a;
+      p.upIsPlus = true;
+    }
+    p.slice = g.cells[p.normal] / 2;
+    return p;
+  }
   if (up < 0) {  // no gravity: the longest axis is vertical
     up = 0;
     for (int a = 1; a < 3; ++a)

@@ -27,7 +27,11 @@ struct LayoutPlane {
   bool upIsPlus = true;  // up points along +axis `up`
   int slice = 0;         // the cell index along `normal` the plane cuts
 };
-LayoutPlane layoutPlane(const GlobalGrid& g, const Real3& gravity);
+/// `plane` "" chooses as above; "xz", "yz" or "xy" names the two axes in the plane (cut at the
+/// middle cell of the third): the vertical one drawn upwards when it is one of them, else the
+/// second named (y of xy) upwards and the first across. Throws ConfigError naming --plane for
+/// another value.
+LayoutPlane layoutPlane(const GlobalGrid& g, const Real3& gravity, const std::string& plane = "");
 
 /// Writes the SVG to `path` (through path.tmp and a rename: never a partial file). Grey: the
 /// particles a cell (`particlesPerCell`, x fastest) summed along the normal; each rank's block

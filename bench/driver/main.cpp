@@ -15,7 +15,10 @@
 // the time loop (a blow-up) exits with status 3 on every rank, an output that cannot be written
 // with 4, a run stopped by SIGTERM/SIGINT with 128 + the signal (bench/driver/run.hpp,
 // docs/robustness.md).
+#include <fmt/core.h>
+
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -27,6 +30,10 @@
 #include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
 #include "coloc/core/provenance.hpp"
+#include "coloc/coupling/library_version.hpp"
+#include "coloc/fv/library_version.hpp"
+#include "coloc/io/library_version.hpp"
+#include "data_dir.hpp"
 #include "plan.hpp"
 #include "run.hpp"
 #include "snapshot.hpp"
@@ -43,6 +50,24 @@ extern "C" int MPI_Abort(MPI_Comm comm, int errorcode) {
 
 namespace {
 
+/// `coloc --version`: the version and what the binary was built from and with (as `lmp -h`
+/// shows LAMMPS's build): commit, compiler, flags, the libraries, where its scripts are.
+std::string versionText() {
+  std::string text = coloc::buildDescription();
+  text += "  hypre:       " + coloc::fv::hypreVersion() + "\n";
+  text += "  HDF5:        " + coloc::hdf5Version() + " (parallel)\n";
+  text += "  SLEEF:       " + coloc::coupling::sleefVersion() + "\n";
+  text += "  headers:     Eigen " + std::to_string(EIGEN_WORLD_VERSION) + "." +
+          std::to_string(EIGEN_MAJOR_VERSION) + "." + std::to_string(EIGEN_MINOR_VERSION) +
+          ", {fmt} " + std::to_string(FMT_VERSION / 10000) + "." +
+          std::to_string(FMT_VERSION / 100 % 100) + "." + std::to_string(FMT_VERSION % 100) +
+          ", nlohmann_json " + std::to_string(NLOHMANN_JSON_VERSION_MAJOR) + "." +
+          std::to_string(NLOHMANN_JSON_VERSION_MINOR) + "." +
+          std::to_string(NLOHMANN_JSON_VERSION_PATCH) + ", CLI11 " + CLI11_VERSION + "\n";
+  text += "  data:        " + coloc::dataDir().string() + " (scripts, cases)";
+  return text;
+}
+
 /// Every subcommand but `coloc snapshot`, between MPI_Init and MPI_Finalize (main()). Returns
 /// the exit status; a run that asks for its picture sets `snapshot` (rank 0).
 int mpiMain(int argc, char** argv, std::optional<coloc::SnapshotJob>& snapshot) {
@@ -52,7 +77,8 @@ int mpiMain(int argc, char** argv, std::optional<coloc::SnapshotJob>& snapshot) 
       "coloc: co-located partitions CFD-DEM mini-app (fluid cells and the particles in\n"
       "the same region live on the same MPI rank). Run with mpirun -n N coloc run CASE."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("coloc ") + coloc::kVersion);
+  app.set_version_flag("--version", versionText(),
+                       "the version, git commit, compiler, flags and libraries of this build");
   coloc::RunOptions opts;
   opts.commandLine = coloc::commandLineText(argc, argv);
   auto* run = app.add_subcommand("run", "run a case file and write DIR/report.json");
@@ -92,6 +118,12 @@ int mpiMain(int argc, char** argv, std::optional<coloc::SnapshotJob>& snapshot) 
   checkCmd->add_option("--draw", check.drawPath,
                        "also draw every strategy's layout on the vertical mid-plane (an SVG file: "
                        "blocks numbered by rank over the particles a cell)");
+  checkCmd
+      ->add_option("--plane", check.plane,
+                   "with --draw: the plane drawn by its two axes, cut at the middle cell of the "
+                   "third (default: the vertical mid-plane along the longer horizontal axis)")
+      ->check(CLI::IsMember({"xz", "yz", "xy"}))
+      ->needs("--draw");
   coloc::PlanOptions planOpts;
   auto* plan = app.add_subcommand(
       "plan",

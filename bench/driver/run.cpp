@@ -247,7 +247,8 @@ int Run::prepareFolders() {
       removeStaleFiles(folders_);
       fault::point("outdir", 0);
       log_.open((std::filesystem::path(outDir_) / "log.txt").string(),
-                restartInFolders(folders_, opts_.restart));
+                restartInFolders(folders_, opts_.restart),
+                logHeader(prov_, opts_.casePath, outDir_));
     });
   if (v.failed()) {
     say(v, "");
@@ -306,16 +307,23 @@ int Run::setUp() {
         setupWall_ = MPI_Wtime() - t0_;
         const long long particleCount =
             simulation_->particles() ? simulation_->particles()->globalCount() : 0;  // collective
-        if (root_ && !opts_.quiet) {
+        if (root_) {
+          // With --quiet these lines go to the log only.
           const auto& dec = simulation_->decomposition();
-          log_.out(
+          const std::string caseLine = fmt::format(
               "coloc: case '{}', mode {}, {} rank(s) as {}, {} cells, {} particles, "
               "set-up {:.2f} s\n",
               cfg_.string("name"), runModeName(simulation_->mode()), dec.size(), dec.shape(),
               static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall_);
-          if (!opts_.restart.empty())
-            log_.out("coloc: restarted from {} at step {}, t = {:.9g} s\n", opts_.restart,
-                     simulation_->steps(), simulation_->time());
+          const std::string restartLine =
+              opts_.restart.empty()
+                  ? std::string()
+                  : fmt::format("coloc: restarted from {} at step {}, t = {:.9g} s\n",
+                                opts_.restart, simulation_->steps(), simulation_->time());
+          if (opts_.quiet)
+            log_.file("{}{}", caseLine, restartLine);
+          else
+            log_.out("{}{}", caseLine, restartLine);
         }
         if (!opts_.restart.empty()) {
           restartReport_ = accountRestart(world_, opts_.restart, cfg_, log_);

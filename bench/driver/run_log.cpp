@@ -16,12 +16,45 @@ RunLog::~RunLog() {
   if (file_) std::fclose(file_);
 }
 
-void RunLog::open(const std::string& path, bool append) {
+std::string logHeader(const Json& p, const std::string& casePath, const std::string& outDir) {
+  const auto text = [&](const char* key) {
+    if (!p.contains(key)) return std::string("unknown");
+    return p[key].is_string() ? p[key].get<std::string>() : p[key].dump();
+  };
+  const Json env = p.value("mpi_env", Json::object());
+  const auto envText = [&](const char* key) {
+    if (!env.contains(key)) return std::string("unknown");
+    return env[key].is_string() ? env[key].get<std::string>() : env[key].dump();
+  };
+  const bool dirty =
+      p.contains("git_dirty") && p["git_dirty"].is_boolean() && p["git_dirty"].get<bool>();
+  std::string h;
+  h += fmt::format("coloc: coloc {}, git {}{}\n", text("coloc_version"), text("git_commit"),
+                   dirty ? " (with uncommitted changes)" : "");
+  h += fmt::format("coloc: command: {}\n", text("command_line"));
+  h += fmt::format("coloc: {} on {} ({}, {} cores online)\n", text("date"), text("host"),
+                   text("cpu_model"), text("cores"));
+  h += fmt::format(
+      "coloc: {} rank(s) on {} node(s), {}-{} a node{}; binding {} (rank 0 on CPUs {}); "
+      "yield when idle {}\n",
+      text("ranks"), text("nodes"), envText("ranks_per_node_min"), envText("ranks_per_node_max"),
+      p.value("oversubscribed", false) ? ", oversubscribed" : "", envText("binding"),
+      envText("cpus_rank0"), envText("yield_when_idle"));
+  h += fmt::format("coloc: MPI: {}\n", text("mpi_library"));
+  h += fmt::format("coloc: build: {} {}, flags {}; hypre {}, HDF5 {}\n", text("compiler"),
+                   text("build_type"), text("compiler_flags"), text("hypre_version"),
+                   text("hdf5_version"));
+  h += fmt::format("coloc: case file {}, output folder {}\n", casePath, outDir);
+  return h;
+}
+
+void RunLog::open(const std::string& path, bool append, const std::string& header) {
   if (!root_) return;
   if (file_) std::fclose(file_);
   file_ = std::fopen(path.c_str(), append ? "ae" : "we");
   if (!file_) throw IoError("cannot create the log file '" + path + "': " + std::strerror(errno));
   if (append) std::fputs("coloc: ---- the run continues (--restart) ----\n", file_);
+  std::fwrite(header.data(), 1, header.size(), file_);
   std::fwrite(pending_.data(), 1, pending_.size(), file_);
   std::fflush(file_);
   pending_.clear();

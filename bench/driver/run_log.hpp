@@ -8,7 +8,16 @@
 #include <string>
 #include <utility>
 
+#include "coloc/core/config.hpp"
+
 namespace coloc {
+
+/// The first lines of a run's log (OUT/log.txt), from report.json's provenance: version and
+/// commit, the command, date and host, ranks and nodes, the MPI environment that changes timings
+/// (binding, yield), the build and the libraries; then the case and the output folder. Each line
+/// starts with "coloc: ".
+std::string logHeader(const Json& provenance, const std::string& casePath,
+                      const std::string& outDir);
 
 /// Rank 0's messages: each goes to stdout or stderr as before and, once open(), to the log file
 /// too (lines from before open() are kept and written first). The other ranks print nothing.
@@ -22,8 +31,9 @@ class RunLog {
   RunLog& operator=(const RunLog&) = delete;
 
   /// Rank 0: opens `path` (new, or appended to when `append`: a restart continuing its run in
-  /// the same folder). Throws IoError when it cannot be created.
-  void open(const std::string& path, bool append);
+  /// the same folder), writes `header` (logHeader(); the log only, --quiet or not), then the
+  /// lines from before. Throws IoError when it cannot be created.
+  void open(const std::string& path, bool append, const std::string& header = "");
   /// Rank 0: appends to a log a run has closed, without the restart's mark (the snapshot that
   /// main() draws after MPI_Finalize: snapshot.hpp). Throws IoError when it cannot be opened.
   void reopen(const std::string& path);

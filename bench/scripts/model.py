@@ -9,8 +9,10 @@ time per step of rank r = unit costs measured on 1 rank (report.json timers)
 
 Unit costs (seconds from a 1-rank run of the same physics; wall, or thread-CPU with --busy):
   fluid          per cell-step (momentum, boundaries, projection, cell fields);
-  pressure set-up per cell-step (fluid_pressure_assemble: right-hand side, matrix and, where the
-                 coefficients change, hypre's PCG+PFMG set-up; report.pressure.setups counts them);
+  pressure set-up per cell-step (fluid_pressure_assemble: right-hand side and matrix), and per
+                 cell and set-up (fluid_pressure_setup: hypre's PCG+PFMG set-up) x the set-ups a
+                 step (report.pressure.setups / steps: 1 / fluid.pressure.setup_interval in a
+                 long run; reports before the split book both in the first, one set-up a step);
   pressure solve per cell and PCG iteration, x the iterations per step of the 1-rank run;
   hypre's overhead per PFMG level and face neighbour (per iteration, per set-up) that 1 rank
                  cannot show: bench_fv BM_PressureSolve on cubes (--overhead-grid own: on the
@@ -171,7 +173,7 @@ def pfmg_levels(layout):
     return grid_levels([cuts[-1] for cuts in layout["fluid_cuts"]])
 
 
-def predict_layout(costs, layout, prof):
+def predict_layout(costs, layout, prof, setups_per_step=None):
     P = layout["ranks"]
     pr = layout["per_rank"]
     ks = pr["per_step"]
@@ -186,7 +188,9 @@ def predict_layout(costs, layout, prof):
     ms = costs.get("memory_share", {})
     f = {g: 1.0 + ms.get(g, 0.0) * (c - 1.0) for g in GROUPS}
     iters = costs["pressure_iterations_per_step"]
-    setups = costs.get("pressure_setups_per_step", 1.0)
+    # hypre's set-ups a step: the calibration run's, or the caller's (fluid.pressure.setup_interval
+    # keeps a set-up for up to that many steps: 1 / interval in a long run)
+    setups = costs.get("pressure_setups_per_step", 1.0) if setups_per_step is None else setups_per_step
     ov = costs.get("pressure_overhead", {})
     o_it = ov.get("per_level_neighbour_iteration_s", 0.0)
     o_su = ov.get("per_level_neighbour_setup_s", 0.0)
@@ -208,8 +212,12 @@ def predict_layout(costs, layout, prof):
         coupled = pr["proxies"][r] if indep else parts
         nb = 0 if P == 1 else (box_face_neighbours(boxes, r) if boxes else neighbours(dims, r))
         fluid = cells * costs["fluid_per_cell_step"] * f["fluid"]
-        psetup = setups * (cells * costs.get("pressure_setup_per_cell_step", 0.0) *
-                           f["pressure_setup"] + levels * nb * o_su)
+        psetup = (cells * (costs.get("pressure_setup_per_cell_step", 0.0) +
+                           setups * costs.get("pressure_hypre_setup_per_cell", 0.0)) *
+                  f["pressure_setup"] + setups * levels * nb * o_su)
+        if "pressure_hypre_setup_per_cell" not in costs:  # costs of before the split: per set-up
+            psetup = setups * (cells * costs.get("pressure_setup_per_cell_step", 0.0) *
+                               f["pressure_setup"] + levels * nb * o_su)
         psolve = iters * (cells * costs["pressure_per_cell_iteration"] * f["pressure_solve"] +
                           levels * nb * o_it)
         halo_p = pr["ghost_cells"][r] / 2 * 8  # one layer of p on the fine level

@@ -41,6 +41,8 @@ import provenance  # noqa: E402  (bench/scripts/provenance.py: the stamp on ever
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "python"))  # bench/python, share/coloc/python
+import coloc  # noqa: E402  (find_coloc: the installed binary beside this script, or build/coloc)
 
 
 def run_point(args, n, mode, rep):
@@ -250,7 +252,9 @@ def main():
     p.add_argument("--modes", nargs="+", default=["coupled", "fluid", "particles"])
     p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--launcher", default="mpiexec -n {n} --bind-to none")
-    p.add_argument("--coloc", default=os.path.join(ROOT, "build", "coloc"))
+    p.add_argument("--coloc", default=coloc.find_coloc() or os.path.join(ROOT, "build", "coloc"),
+                   help="the coloc binary (default: the installed one beside this script, else "
+                        "build/coloc of the source tree, else coloc on PATH)")
     p.add_argument("--out", default=None)
     p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
     p.add_argument("--plot-only", action="store_true", help="re-plot an existing scaling.csv")

@@ -11,11 +11,13 @@ the left and by their speed on the right. The blocks of the partition (report.js
 partition.boxes: the fluid's block of every rank, process grid or tiled boxes) that the plane
 cuts are drawn on both as white lines, numbered by rank up to 64 ranks. A bed under a tall
 freeboard (the particles below 70 % of the box height) is drawn up to a margin above its highest
-particle, said in the title; --full draws the whole box.
+particle, and above every block face the plane cuts (the blocks stay whole in view), said in the
+title; --full draws the whole box.
 Reads the files of docs/output.md with h5py (fields_NNNNNN.h5, particles_NNNNNN.h5) and the
 case's gravity from report.json when it is there (else: the longest axis is vertical). The coloc
 driver runs this at the end of a run that writes fields (key output.snapshot). Exit status 0
-when the PNG is written, 1 with a message otherwise.
+when the PNG is written; 2 for a --step that has no output (the message lists the steps that
+have); 1 with a message otherwise.
 """
 import argparse
 import glob
@@ -25,13 +27,43 @@ import re
 import sys
 
 
-def last_step(out_dir, series):
+def output_steps(out_dir, series):
+    """The steps of OUT_DIR/SERIES_NNNNNN.h5, sorted."""
     steps = []
     for f in glob.glob(os.path.join(out_dir, series + "_*.h5")):
         m = re.search(r"_(\d+)\.h5$", f)
         if m:
             steps.append(int(m.group(1)))
-    return max(steps) if steps else None
+    return sorted(steps)
+
+
+def last_step(out_dir, series):
+    steps = output_steps(out_dir, series)
+    return steps[-1] if steps else None
+
+
+def steps_text(steps):
+    """A list of steps for a message: all of them, or the first and last five of many."""
+    if len(steps) <= 12:
+        return ", ".join(str(s) for s in steps)
+    return "%s, ..., %s (%d steps)" % (", ".join(str(s) for s in steps[:5]),
+                                       ", ".join(str(s) for s in steps[-5:]), len(steps))
+
+
+def crop_top(particles_up, lo, length, spacing, faces):
+    """Where the picture of a bed under a freeboard ends along the vertical axis (gravity along
+    -up): a margin above the highest particle (a quarter of the particles' height, at least 4
+    cells) and 2 cells above the highest block face the plane cuts (`faces`, m, the box's own
+    faces excluded), when that leaves out more than 30 % of the box; else the top of the box."""
+    top = lo + length
+    if len(particles_up) == 0:
+        return top
+    hi, low = float(max(particles_up)), float(min(particles_up))
+    want = hi + max(0.25 * (hi - low), 4 * spacing)
+    inner = [f for f in faces if lo < f < top]
+    if inner:
+        want = max(want, max(inner) + 2 * spacing)
+    return want if want < lo + 0.7 * length else top
 
 
 def vertical_axis(report, length):
@@ -66,7 +98,8 @@ def main():
     ap.add_argument("--report", help="the run's report.json (default: OUT_DIR/report.json)")
     ap.add_argument("--full", action="store_true",
                     help="the whole height of the box (default: cropped a margin above the "
-                         "highest particle when that leaves out more than 30 %% of the box)")
+                         "highest particle and the block faces when that leaves out more than "
+                         "30 %% of the box)")
     args = ap.parse_args()
     try:
         import h5py
@@ -80,18 +113,29 @@ def main():
               file=sys.stderr)
         return 1
 
-    step = args.step if args.step is not None else last_step(args.out_dir, "fields")
-    if step is None:
-        print("snapshot.py: no fields_*.h5 in '%s'" % args.out_dir, file=sys.stderr)
+    steps = output_steps(args.out_dir, "fields")
+    if not steps:
+        print("snapshot.py: no fields_*.h5 in '%s' (a run writes them with "
+              "output.interval_steps > 0)" % args.out_dir, file=sys.stderr)
         return 1
+    if args.step is not None and args.step not in steps:
+        print("snapshot.py: error: no output at step %d in '%s' (no fields_%06d.h5); the steps "
+              "with output: %s" % (args.step, args.out_dir, args.step, steps_text(steps)),
+              file=sys.stderr)
+        return 2
+    step = args.step if args.step is not None else steps[-1]
     fpath = os.path.join(args.out_dir, "fields_%06d.h5" % step)
-    with h5py.File(fpath, "r") as f:
-        origin = np.array(f.attrs["origin"], dtype=float)
-        spacing = np.array(f.attrs["spacing"], dtype=float)
-        cells = np.array(f.attrs["cells"], dtype=float).astype(int)
-        time = float(f.attrs["time"])
-        eps = f["eps"][...] if "eps" in f else None      # [nz][ny][nx]
-        u = f["u"][...] if "u" in f else None            # [nz][ny][nx][3]
+    try:
+        with h5py.File(fpath, "r") as f:
+            origin = np.array(f.attrs["origin"], dtype=float)
+            spacing = np.array(f.attrs["spacing"], dtype=float)
+            cells = np.array(f.attrs["cells"], dtype=float).astype(int)
+            time = float(f.attrs["time"])
+            eps = f["eps"][...] if "eps" in f else None      # [nz][ny][nx]
+            u = f["u"][...] if "u" in f else None            # [nz][ny][nx][3]
+    except (OSError, KeyError) as e:
+        print("snapshot.py: error: cannot read '%s': %s" % (fpath, e), file=sys.stderr)
+        return 1
     length = spacing * cells
     report = args.report or os.path.join(args.out_dir, "report.json")
     up, sign = vertical_axis(report, length)
@@ -119,24 +163,27 @@ def main():
     ppath = os.path.join(args.out_dir, "particles_%06d.h5" % step)
     px = None
     if os.path.exists(ppath):
-        with h5py.File(ppath, "r") as f:
-            x, v, r = f["x"][...], f["v"][...], f["radius"][...]
-            rank = f["rank"][...] if "rank" in f else np.zeros(len(x), dtype=int)
+        try:
+            with h5py.File(ppath, "r") as f:
+                x, v, r = f["x"][...], f["v"][...], f["radius"][...]
+                rank = f["rank"][...] if "rank" in f else np.zeros(len(x), dtype=int)
+        except (OSError, KeyError) as e:
+            print("snapshot.py: error: cannot read '%s': %s" % (ppath, e), file=sys.stderr)
+            return 1
         near = np.abs(x[:, normal] - (origin[normal] + (mid + 0.5) * spacing[normal])) \
             <= spacing[normal]
         px, pv, pr, prank = x[near], np.linalg.norm(v[near], axis=1), r[near], rank[near]
         ntotal = len(x)
 
     ext = [origin[horiz], origin[horiz] + length[horiz], origin[up], origin[up] + length[up]]
-    # Crop the empty freeboard: show up to a margin above the highest particle (a quarter of the
-    # particles' height, at least 4 cells) when that leaves out more than 30 % of the box (gravity
-    # along -up only; --full keeps the whole box).
+    # Crop the empty freeboard: show up to a margin above the highest particle and above the
+    # block faces the plane cuts (crop_top), when that leaves out more than 30 % of the box
+    # (gravity along -up only; --full keeps the whole box).
     top = ext[3]
     if px is not None and ntotal and sign > 0 and not args.full:
-        hi, lo = float(x[:, up].max()), float(x[:, up].min())
-        want = hi + max(0.25 * (hi - lo), 4 * spacing[up])
-        if want < ext[2] + 0.7 * length[up]:
-            top = want
+        faces = [origin[up] + b[k + up] * spacing[up] for b in boxes
+                 if b[normal] <= mid < b[3 + normal] for k in (0, 3)]
+        top = crop_top(x[:, up], ext[2], length[up], spacing[up], faces)
     aspect = (top - ext[2]) / length[horiz]
     w = 4.0 if aspect > 1.5 else 6.0
     # the panels' axes keep the box's aspect: about 0.78 w wide each, plus titles and colour bars

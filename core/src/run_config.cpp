@@ -36,9 +36,15 @@ void declareRunConfig(Schema& s) {
              "last step), p_iter (pressure iterations of the last solve), p_iter_avg (per "
              "solve over the run), dp (rho_f (p_bottom - p_top) between the lowest and the "
              "highest layer of cells along gravity, Pa), wall_per_step (s, since the last "
-             "row), steps_per_s (over this run), left (estimated wall seconds to the end); "
-             "'-' where the run has no such value (docs/output.md)",
-             progressColumnNames());
+             "row), steps_per_s (over this run), left (estimated wall seconds to the end), "
+             "t_fluid (K, the fluid's mean temperature weighted by eps: fluid.heat), "
+             "t_particles (K, the particles' mass-weighted mean temperature: particles.heat); "
+             "or any number of report.json by its key path with dots (LAMMPS's thermo_style "
+             "custom), e.g. fluid.cfl_last, particles.heat.temperature_max, "
+             "timers.dem_force.max, bed.bed_height_m, fluid.drag_force.2: computed at each row "
+             "(the report's collectives then), refused at the set-up when the run's report has "
+             "no such number; '-' where the run has no such value (docs/output.md)",
+             progressColumnNames(), true);
   s.boolean("run.timer_sync", false,
             "timed barriers before the fluid's halo after the momentum predictor and before "
             "the DEM's rebuild vote in every sub-step: a rank's wait for the slowest one is "
@@ -53,8 +59,9 @@ void declareRunConfig(Schema& s) {
 
 const std::vector<std::string>& progressColumnNames() {
   static const std::vector<std::string> names = {
-      "step",   "time",       "dt", "particles",     "ke",          "contacts", "cfl",
-      "p_iter", "p_iter_avg", "dp", "wall_per_step", "steps_per_s", "left"};
+      "step",          "time",        "dt",     "particles",  "ke",
+      "contacts",      "cfl",         "p_iter", "p_iter_avg", "dp",
+      "wall_per_step", "steps_per_s", "left",   "t_fluid",    "t_particles"};
   return names;
 }
 

@@ -238,11 +238,13 @@ Schema& Schema::numberList(const std::string& path, std::optional<std::vector<do
 }
 
 Schema& Schema::nameList(const std::string& path, std::vector<std::string> def,
-                         const std::string& help, std::vector<std::string> choices) {
+                         const std::string& help, std::vector<std::string> choices,
+                         bool dottedNames) {
   KeySpec s;
   s.kind = KeyKind::NameList;
   s.defaultValue = def;
   s.choices = std::move(choices);
+  s.dottedNames = dottedNames;
   s.help = help;
   insert(path, std::move(s));
   return *this;
@@ -409,8 +411,10 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         if (names.empty()) throw ConfigError(path, "no names given, expected some of: " + allowed);
         for (const auto& n : names)
           if (!spec.choices.empty() &&
-              std::find(spec.choices.begin(), spec.choices.end(), n) == spec.choices.end())
-            throw ConfigError(path, "unknown name '" + n + "', expected some of: " + allowed);
+              std::find(spec.choices.begin(), spec.choices.end(), n) == spec.choices.end() &&
+              !(spec.dottedNames && n.find('.') != std::string::npos))
+            throw ConfigError(path, "unknown name '" + n + "', expected some of: " + allowed +
+                                        (spec.dottedNames ? ", or a key path with a dot" : ""));
         out[key] = names;
         break;
       }
@@ -453,6 +457,7 @@ std::string Schema::describe(const std::string& prefix) const {
     if (!spec.choices.empty()) {
       os << (spec.kind == KeyKind::NameList ? ", each one of" : ", one of");
       for (auto& c : spec.choices) os << " " << c;
+      if (spec.dottedNames) os << " or a key path with a dot";
     }
     os << ")\n      " << spec.help << "\n";
     for (const auto& [type, sch] : spec.items) {

@@ -246,6 +246,12 @@ void forEachFluidCounter(C& c, Fn&& fn) {
   fn("iterations_max", c.itMax, Held::Always);
   fn("iterations_last", c.itLast, Held::Always);
   fn("unconverged_solves", c.unconverged, Held::Since);
+  // the pressure set-up reuse (absent: no hierarchy kept, the next step sets one up)
+  fn("pressure_setup_dt", c.setupDt, Held::Since);
+  fn("pressure_matrix_dt", c.matrixDt, Held::Since);
+  fn("pressure_setup_reuses", c.setupReuses, Held::Since);
+  fn("pressure_setup_iterations", c.setupIterations, Held::Since);
+  fn("pressure_setup_due", c.setupDue, Held::Since);
   fn("have_old", c.haveOld, Held::Always);
   fn("rates_stale", c.ratesStale, Held::Always);
   // fluid.heat: the energy accounting
@@ -301,9 +307,14 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
                     fv::FluidSolver& fluid) {
   // the table's non-const walk marks the solver's ghosts and rates stale; restoreState sets them
   std::string err;  // a restart must not start from NaN or from an impossible fluid fraction
+  bool lacksOptional = false;
   fv::forEachStateField(
       fluid, [&](const fv::FluidSolver::StateField& sf, Field3<double>* const* a) {
         const std::string path = group + "/" + sf.name;
+        if (sf.optional && !file.exists(path)) {
+          lacksOptional = true;
+          return;
+        }
         if (sf.stagger >= 0)
           readFaceComponent(file, path, dec, sf.stagger, *a[0]);
         else if (sf.components == 1)
@@ -328,6 +339,8 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
     } catch (const Error&) {
     }
   });
+  // The optional arrays are the pressure set-up's operator: without them the next step sets up.
+  if (lacksOptional) c.setupDt = -1;
   fluid.restoreState(c);
 }
 

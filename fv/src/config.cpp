@@ -147,6 +147,17 @@ void declareConfig(Schema& s) {
             "PFMG smooths the finest level and then only where its coarsening (one axis a "
             "level) returns to an axis it already halved: one level in three on cubic cells "
             "(hypre's skip_relax, for isotropic problems); false: every level");
+  s.integer("fluid.pressure.setup_interval", 20,
+            "the most pressure operators one multigrid set-up serves: the hierarchy set up on one "
+            "step's operator preconditions the next steps' (their own finest level, the old "
+            "coarse levels) until this many, or until a solve needs more iterations than "
+            "setup_iteration_growth allows; 1: a set-up whenever eps, K or dt change (docs/fv.md, "
+            "pressure set-up reuse)",
+            Range::between(1, 1e9));
+  s.number("fluid.pressure.setup_iteration_growth", 1.5,
+           "a new set-up before the next operator when a solve needed more than this times the "
+           "iterations of the first solve on the set-up (and at least one more)",
+           Range::between(1.0, 1e9));
   s.boolean("fluid.heat", false,
             "solve the fluid energy equation (docs/heat.md): needs fluid.conductivity, "
             "fluid.heat_capacity, fluid.initial_temperature and an inlet temperature per inlet; "
@@ -200,6 +211,8 @@ FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid) {
   o.rap = cfg.string("fluid.pressure.pfmg.rap") == "galerkin" ? PressureSolver::Rap::Galerkin
                                                               : PressureSolver::Rap::NonGalerkin;
   o.skipRelax = cfg.boolean("fluid.pressure.pfmg.skip_relax");
+  p.reuse.interval = cfg.integer("fluid.pressure.setup_interval");
+  p.reuse.growth = cfg.number("fluid.pressure.setup_iteration_growth");
   p.warmStart = cfg.string("fluid.pressure.initial_guess") == "previous";
   p.bc = boundaryFromConfig(cfg, grid);
   auto& h = p.heat;

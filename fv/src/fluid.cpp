@@ -54,6 +54,10 @@ FluidSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t)
   f.epsOld = CellField(cl, 1.0);
   f.K = CellField(cl, 0.0);
   for (auto& k : f.KUp) k = CellField(cl, 0.0);
+  if (prm.reuse.on()) {
+    f.epsSetup = CellField(cl, 1.0);
+    f.KSetup = CellField(cl, 0.0);
+  }
   if (prm.heat.on) {
     f.T = CellField(cl, prm.heat.initial);
     f.heatSource = CellField(cl, 0.0);
@@ -199,7 +203,12 @@ FluidCounters FluidSolver::counters() const {
   c.steps = m.steps;
   c.itSum = m.itSum;
   c.solves = m.solves;
-  c.setups = m.ps->setups() + m.setupsOffset;
+  c.setups = m.setupsDone;
+  c.setupDt = m.setupDt;
+  c.matrixDt = m.matrixDt;
+  c.setupReuses = m.setupReuses;
+  c.setupIterations = m.setupIterations;
+  c.setupDue = m.setupDue;
   c.itMax = m.itMax;
   c.itLast = m.itLast;
   c.unconverged = m.unconverged;
@@ -234,8 +243,6 @@ void FluidSolver::restoreState(const FluidCounters& c) {
   for (auto& k : f.KUp) applyScalarBc(m.dec, k);
   m.uGhostsFresh = false;
   m.epsGhostsFresh = true;  // gathered and closed above
-  m.coefficientsChanged = true;
-  m.matrixDt = -1;
   m.time = c.time;
   m.dtOld = c.dtOld;
   m.dtLast = c.dtLast;
@@ -247,7 +254,7 @@ void FluidSolver::restoreState(const FluidCounters& c) {
   m.steps = c.steps;
   m.itSum = c.itSum;
   m.solves = c.solves;
-  m.setupsOffset = c.setups - m.ps->setups();
+  m.setupsDone = c.setups;
   m.itMax = static_cast<int>(c.itMax);
   m.itLast = static_cast<int>(c.itLast);
   m.unconverged = c.unconverged;  // kept by a re-balance and in checkpoints
@@ -264,6 +271,7 @@ void FluidSolver::restoreState(const FluidCounters& c) {
     applyScalarBc(m.dec, f.T);
     m.tGhostsFresh = true;
   }
+  m.restorePressure(c);
 }
 
 void FluidSolver::cellVelocity(std::array<CellField, 3>& out) {
@@ -369,7 +377,8 @@ Json FluidSolver::diagnostics() const {
                    {"iterations_last", m.itLast},
                    {"residual_last", m.resLast},
                    {"rhs_scale_last", m.rhsScaleLast},
-                   {"setups", m.ps->setups() + m.setupsOffset}};
+                   {"setups", m.setupsDone},
+                   {"setup_interval", m.prm.reuse.interval}};
   j["checks"] = {{"mass_balance", balance}};
   j["fluid"] = {{"steps", m.steps},
                 {"unconverged_solves", m.unconverged},

@@ -68,7 +68,11 @@ struct FluidSolver::Impl {
   double maxRate = 0;  // max over cells of sum_d |u_d|/h_d (1/s), after the last step
   double cflLast = 0, dtLast = 0, steadyResidual = std::numeric_limits<double>::infinity();
   double rhsScaleLast = 0;
-  long long setupsOffset = 0;                       // pressure-matrix setups before a restore
+  // The pressure set-up reuse (prm.reuse; FluidCounters says what each holds).
+  double setupDt = -1;
+  long long setupReuses = 0, setupIterations = -1;
+  bool setupDue = false;
+  long long setupsDone = 0;  // multigrid set-ups of the run (a restore's rebuild not counted)
   double inLocal = 0, outLocal = 0, dVolLocal = 0;  // last step, this rank
   double dVolGrossLocal = 0;  // sum over the cells of |d eps/dt| V_cell, last step, this rank
   double umaxLast = 0;        // max |u| over the faces after the last step (global)
@@ -101,7 +105,18 @@ struct FluidSolver::Impl {
   /// The pressure matrix when its coefficients changed, the right-hand side -div(eps u*) -
   /// d eps/dt for q = p dt, its flux scale, the warm start; the volume change of the step.
   void assemblePressureRhs(double dt);
+  /// The pressure matrix of this step's eps, K and dt to hypre (setOperator).
   void assembleMatrix(double dt);
+  /// The pressure matrix of e, K (ghosts current) and dt into `matrix`; anyK from it.
+  void fillMatrix(const CellField& e, const CellField& K, double dt);
+  /// `matrix` to hypre as the new operator: a multigrid set-up on it, or the hierarchy kept
+  /// (prm.reuse: fewer than setup_interval operators served and no solve asked for one).
+  void setOperator(double dt);
+  /// A multigrid set-up on `matrix` (this step's eps and K at dt), which it keeps.
+  void setUpPressure(double dt);
+  /// restoreState's part: the hierarchy set up again on the operator of the state's last set-up
+  /// and the state's operator given to it (or, without them, a set-up at the next step).
+  void restorePressure(const FluidCounters& c);
   void interiorCells(int j, int k, int& i0, int& i1) const;
   /// PCG on the pressure equation; iteration counters.
   void solvePressure();

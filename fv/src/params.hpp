@@ -21,6 +21,13 @@ struct HeatParams {
   double initial = 0;       // fluid.initial_temperature (K)
 };
 
+/// fluid.pressure.setup_interval, setup_iteration_growth (docs/fv.md, "Pressure set-up reuse").
+struct SetupReuse {
+  long long interval = 1;  // the most operators one set-up serves (1: every one)
+  double growth = 1.5;     // a solve above growth x the set-up's first solve asks for a new one
+  bool on() const { return interval > 1; }
+};
+
 struct FluidParams {
   double nu = 0;          // fluid.nu (m^2/s)
   double dtFixed = 0;     // fluid.dt (s): the step, or the largest adaptive step
@@ -34,6 +41,7 @@ struct FluidParams {
   Convection convection = Convection::VanLeer;  // fluid.convection, fluid.limiter
   PressureSolver::Options pressure;             // fluid.pressure.* but initial_guess
   bool warmStart = true;                        // fluid.pressure.initial_guess == previous
+  SetupReuse reuse;                             // fluid.pressure.setup_*
   BoxBc bc;                                     // fluid.boundary.*, fluid.patches
   HeatParams heat;                              // fluid.heat, conductivity, heat_capacity, ...
 };

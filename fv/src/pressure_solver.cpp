@@ -116,11 +116,22 @@ void PressureSolver::createMultigrid(bool asPreconditioner) {
   }
 }
 
-void PressureSolver::setMatrix(std::span<double> values) {
+void PressureSolver::setValues(std::span<double> values) {
   HYPRE_Int entries[7] = {0, 1, 2, 3, 4, 5, 6};
   check(HYPRE_StructMatrixSetBoxValues(A_, ilower_, iupper_, 7, entries, values.data()),
         "matrix values");
   check(HYPRE_StructMatrixAssemble(A_), "matrix assemble");
+}
+
+void PressureSolver::updateMatrix(std::span<double> values) {
+  if (!ready_) throw Error("PressureSolver::updateMatrix before setMatrix");
+  // PFMG and SMG keep hypre_StructMatrixRef(A) as their finest level and rebind it at every
+  // solve (pfmg_solve.c, smg_solve.c); PCG's matvec reads A: new values in place reach both.
+  setValues(values);
+}
+
+void PressureSolver::setMatrix(std::span<double> values) {
+  setValues(values);
 
   // hypre's PFMG/SMG setup keeps its hierarchy inside the solver object; a new matrix needs a
   // new setup, done on fresh objects (re-running Setup on the same objects leaks the old levels).

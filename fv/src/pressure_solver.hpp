@@ -5,8 +5,12 @@
 // preconditioned by one V-cycle of PFMG or SMG, or by the multigrid cycle alone iterated to
 // the same stopping test (Options::pcg = false). PFMG's smoother, coarse operators and sweeps
 // are Options (docs/fv.md, "Pressure solver options"). Grid, stencil, matrix and vectors are
-// created once; setMatrix() refreshes the values and redoes the (unavoidable) multigrid setup,
-// which the fluid calls only when eps, K or -- with drag -- dt changed.
+// created once; setMatrix() refreshes the values and sets the multigrid hierarchy up on them;
+// updateMatrix() refreshes the values only and keeps the hierarchy of the last setMatrix() as
+// the preconditioner (or cycle) of the new operator: its finest level and every residual are
+// the new operator's (hypre's PFMG and SMG hold a reference to the matrix object, whose values
+// change in place), its coarse levels and transfers the old one's. The fluid decides which
+// (docs/fv.md, "Pressure set-up reuse").
 //
 // Stencil entry order per cell: 0 centre, 1 -x, 2 +x, 3 -y, 4 +y, 5 -z, 6 +z; values are laid
 // out entry fastest, then x, y, z over this rank's block (hypre's SetBoxValues order).
@@ -46,8 +50,13 @@ class PressureSolver {
   PressureSolver(const PressureSolver&) = delete;
   PressureSolver& operator=(const PressureSolver&) = delete;
 
-  /// New matrix values (7 per owned cell, see above); rebuilds the preconditioner.
+  /// New matrix values (7 per owned cell, see above); sets the multigrid hierarchy up on them.
   void setMatrix(std::span<double> values);
+  /// New matrix values of the same stencil; the hierarchy of the last setMatrix() is kept.
+  /// Needs a setMatrix() before.
+  void updateMatrix(std::span<double> values);
+  /// A hierarchy exists (setMatrix() was called).
+  bool ready() const { return ready_; }
   /// Solve A x = b to ||r||_2 <= tol max(||b||_2, scale): `scale` is the norm of the flux scale
   /// of the right-hand side (so a right-hand side that is only round-off does not ask the
   /// solver for round-off digits). `x` holds the initial guess on entry and the solution on
@@ -65,6 +74,7 @@ class PressureSolver {
  private:
   void destroySolver();
   void createMultigrid(bool asPreconditioner);
+  void setValues(std::span<double> values);
   MPI_Comm comm_;
   Options opt_;
   HYPRE_Int ilower_[3], iupper_[3];

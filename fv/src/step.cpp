@@ -79,13 +79,11 @@ void FluidSolver::Impl::interiorCells(int j, int k, int& i0, int& i1) const {
   i1 = std::max(i0, dec.atHighBoundary(0) ? n[0] - 1 : n[0]);
   i0 = std::min(i0, i1);
 }
-void FluidSolver::Impl::assembleMatrix(double dt) {
+void FluidSolver::Impl::fillMatrix(const CellField& e, const CellField& K, double dt) {
   // Row of cell P: sum_f w_f (q_P - q_nb), w_f = eps_f^2 / ((eps_f + K_f dt) h_d^2), q = p dt.
   // An outlet face (Dirichlet p at the face, half a cell away) doubles w and moves the known
   // value to the right-hand side; inlet, wall and slip faces contribute nothing (dp/dn = 0).
   const Int3 n = dec.cells();
-  const CellField& e = f.eps;
-  const CellField& K = f.K;
   bool localK = false;
   const auto ws = static_cast<std::size_t>(n[0]);
   MatrixRow mrow{};
@@ -135,9 +133,63 @@ void FluidSolver::Impl::assembleMatrix(double dt) {
       for (int i = i1; i < n[0]; ++i) cell(i);
     }
   anyK = dec.comm().max(localK ? 1 : 0) == 1;  // the same rebuild decision on every rank
-  ps->setMatrix(matrix);
+}
+void FluidSolver::Impl::assembleMatrix(double dt) {
+  fillMatrix(f.eps, f.K, dt);
+  setOperator(dt);
   matrixDt = dt;
   coefficientsChanged = false;
+}
+void FluidSolver::Impl::setOperator(double dt) {
+  // Every rank decides alike: the counts and the iteration numbers are global.
+  if (!ps->ready() || setupDue || setupReuses + 1 >= prm.reuse.interval) {
+    setUpPressure(dt);
+  } else {
+    ps->updateMatrix(matrix);
+    ++setupReuses;
+  }
+}
+void FluidSolver::Impl::setUpPressure(double dt) {
+  {
+    ScopedPhase t(timers, Phase::FluidPressureSetup);
+    ps->setMatrix(matrix);
+  }
+  ++setupsDone;
+  setupReuses = 0;
+  setupIterations = -1;
+  setupDue = false;
+  setupDt = dt;
+  if (prm.reuse.on()) {  // its operator, for a restart or a re-balance to set it up again
+    std::copy(f.eps.data().begin(), f.eps.data().end(), f.epsSetup.data().begin());
+    std::copy(f.K.data().begin(), f.K.data().end(), f.KSetup.data().begin());
+  }
+}
+void FluidSolver::Impl::restorePressure(const FluidCounters& c) {
+  setupDt = -1;
+  setupReuses = 0;
+  setupIterations = -1;
+  setupDue = true;  // the hierarchy held (if any) is not the state's
+  matrixDt = -1;    // the next step assembles the operator and sets it up
+  coefficientsChanged = true;
+  if (!prm.reuse.on() || c.setupDt < 0) return;
+  // The set-up's operator with its ghosts as the step's input exchange gave them, set up as
+  // then (not counted: the run's set-ups are those it decided), then the state's own operator.
+  Field3<double>* cells[2] = {&f.epsSetup, &f.KSetup};
+  cellHalo.gather(std::span<Field3<double>* const>(cells, 2));
+  applyScalarBc(dec, f.epsSetup);
+  applyScalarBc(dec, f.KSetup);
+  fillMatrix(f.epsSetup, f.KSetup, c.setupDt);
+  ps->setMatrix(matrix);
+  setupDt = c.setupDt;
+  setupReuses = c.setupReuses;
+  setupIterations = c.setupIterations;
+  setupDue = c.setupDue;
+  if (c.matrixDt >= 0) {
+    fillMatrix(f.eps, f.K, c.matrixDt);
+    ps->updateMatrix(matrix);
+    matrixDt = c.matrixDt;
+    coefficientsChanged = false;
+  }
 }
 void FluidSolver::Impl::computeRates(double dt) {
   // CFL per cell: dt sum_d max(|u_lo|,|u_hi|)/h_d; NaN/Inf anywhere stops the run; the steady
@@ -369,6 +421,19 @@ void FluidSolver::Impl::solvePressure() {
   ScopedPhase t(timers, Phase::FluidPressureSolve);
   const double scale = rhsScaleLast;
   itLast = ps->solve(rhs, sol, scale);
+  if (!ps->lastConverged() && setupReuses > 0) {
+    // A kept hierarchy that fell short: set up on this operator and solve on (every rank alike:
+    // the verdict is global), so that every solve meets its tolerance as with a set-up each time.
+    setUpPressure(matrixDt);
+    itLast += ps->solve(rhs, sol, scale);
+  }
+  if (prm.reuse.on()) {
+    if (setupIterations < 0)
+      setupIterations = itLast;
+    else if (itLast > std::max(static_cast<double>(setupIterations + 1),
+                               prm.reuse.growth * static_cast<double>(setupIterations)))
+      setupDue = true;
+  }
   resLast = scale > 0 ? ps->lastResidualNorm() / scale : 0.0;
   itSum += itLast;
   ++solves;

@@ -9,6 +9,10 @@
 #   snapshot     snapshot.png is written at the end of a run with fields (a PNG of a sensible
 #                size), not with output.snapshot=false or without periodic output; the script
 #                fails with a message on a folder without output
+#   snapshot_steps  `coloc snapshot OUT --step N` of a step without output: exit 2, a message
+#                listing the steps with output, no traceback; of a step with output: drawn. The
+#                default crop above the bed keeps every block face the plane cuts in view (a
+#                low bed under the face of a 1 x 1 x 2 process grid: cropped above that face)
 #   paraview     with ParaView's default reader (OpenDataFile) particles.xmf gives N points AND N
 #                cells and fields.xmf nx*ny*nz cells at every output time, with their arrays
 #   render       render.py writes its four PNGs (offscreen; through xvfb-run when there is no
@@ -130,6 +134,36 @@ EOF
   out=$("$py" "$scripts/snapshot.py" "$work/empty" 2>&1) && fail "snapshot.py passed on no output"
   grep -q "no fields_" <<<"$out" || fail "snapshot.py message: $out"
   echo "PASS: snapshot"
+  ;;
+snapshot_steps)
+  # a low bed (150 particles below z = 6 mm) on two blocks cut at z = 20 mm (cell 8 of 16)
+  run 2 "$work/s" --set run.steps=10 --set output.interval_steps=5 \
+    --set 'partition.dims=[1,1,2]' --set particles.sources.0.count=150 \
+    --set 'particles.sources.0.hi=[0.01,0.01,0.006]'
+  "$coloc" snapshot "$work/s" --step 7 > "$work/bad.log" 2>&1
+  rc=$?
+  cat "$work/bad.log"
+  [[ $rc -eq 2 ]] || fail "coloc snapshot --step 7 (no output there) exited $rc, expected 2"
+  grep -q "no output at step 7 in '$work/s' (no fields_000007.h5); the steps with output: 0, 5, 10" \
+    "$work/bad.log" || fail "no message listing the steps"
+  grep -q "Traceback" "$work/bad.log" && fail "a Python traceback"
+  "$coloc" snapshot "$work/s" --step 5 --png "$work/s5.png" > "$work/s5.log" 2>&1 ||
+    { cat "$work/s5.log"; fail "coloc snapshot --step 5"; }
+  [[ -s $work/s5.png ]] || fail "no s5.png"
+  cat "$work/s5.log"
+  "$py" - "$work/s5.log" "$work/s/report.json" <<'EOF' || fail "the crop hides a block face"
+import json, re, sys
+text, d = open(sys.argv[1]).read(), json.load(open(sys.argv[2]))
+m = re.search(r"cropped at z = ([0-9.e+-]+) m of ([0-9.e+-]+) m", text)
+assert m, "not cropped (the bed is low: it should be)"
+top, box = float(m.group(1)), float(m.group(2))
+dz = d["config"]["domain"]["length"][2] / d["config"]["domain"]["cells"][2]
+faces = sorted({b[k] * dz for b in d["partition"]["boxes"] for k in (2, 5)} - {0.0, box})
+print("crop at", top, "faces", faces)
+assert faces == [0.02], faces
+assert top >= faces[-1] + 2 * dz - 1e-12 and top < box, (top, faces)
+EOF
+  echo "PASS: snapshot_steps"
   ;;
 paraview | render | nodisplay)
   if [[ -z "$pvpython" || ! -x "$pvpython" ]]; then

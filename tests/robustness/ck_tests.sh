@@ -30,6 +30,10 @@
 #                  tile the drawn plane with NP ranks' blocks, and whose panel S shows the boxes
 #                  (and, independent, the particle boxes) a NP-rank run of S reports, cut by the
 #                  plane; a file that cannot be written is an error naming it
+#   drawplane      a 1 x 2 x 1 grid (cut along y) drawn on the default plane (x-z, the cut along y
+#                  not in it: one rank), then with --plane yz (both ranks, split along y) and
+#                  --plane xy (both, across x, up y); --plane without --draw and a bad plane:
+#                  exit 2 naming --plane
 set -u
 test=$1 coloc=$2 mpiexec=$3 py=$4 case=$5 work=$6
 shift 6
@@ -340,6 +344,45 @@ print("the picture holds the run's layout:", st, np_)
 EOF2
     "$expect" "cannot create '$work/no/such/dir/x.svg.tmp'" -- "$coloc" check "$case" --ranks "$np" \
       --draw "$work/no/such/dir/x.svg" || fail "an unwritable picture"
+    ;;
+  drawplane)
+    for pl in "" yz xy; do
+      args=()
+      [[ -n $pl ]] && args=(--plane "$pl")
+      timeout 60 "$coloc" check "$case" --ranks 2 --set 'partition.dims=[1,2,1]' \
+        --draw "$work/p$pl.svg" "${args[@]}" > "$work/p$pl.txt" 2>&1 ||
+        { cat "$work/p$pl.txt"; fail "coloc check --draw ${args[*]}"; }
+    done
+    "$py" - "$work" <<'EOF2' || fail "the planes drawn"
+import sys
+import xml.etree.ElementTree as ET
+work = sys.argv[1]
+def blocks(name):
+    svg = ET.parse(f"{work}/{name}.svg").getroot()
+    panel = next(g for g in svg.iter("{http://www.w3.org/2000/svg}g")
+                 if g.get("class") == "panel" and g.get("data-strategy") == "uniform")
+    text = " ".join(t.text or "" for t in svg.iter("{http://www.w3.org/2000/svg}text"))
+    return sorted((int(r.get("data-rank")), r.get("data-lo"), r.get("data-hi"))
+                  for r in panel.iter("{http://www.w3.org/2000/svg}rect")
+                  if r.get("class") == "block"), text
+b, t = blocks("p")
+print("default:", b)
+assert len(b) == 1 and "The plane y = " in t, (b, t)
+b, t = blocks("pyz")
+print("yz:", b)
+# across y (4 cells, cut at 2), up z (16 cells)
+assert b == [(0, "0 0", "2 16"), (1, "2 0", "4 16")], b
+assert "The plane x = " in t and "y: 0 .. 0.01 m (4 cells)" in t, t
+b, t = blocks("pxy")
+print("xy:", b)
+# across x (4 cells, whole), up y (cut at 2)
+assert b == [(0, "0 0", "4 2"), (1, "0 2", "4 4")], b
+assert "The plane z = " in t, t
+print("planes: default one rank, yz and xy both")
+EOF2
+    "$expect" "--plane" -- "$coloc" check "$case" --ranks 2 --plane yz || fail "--plane without --draw"
+    "$expect" "--plane: zz not in" -- "$coloc" check "$case" --ranks 2 --draw "$work/x.svg" \
+      --plane zz || fail "a bad plane"
     ;;
   *) fail "unknown test $test" ;;
 esac

@@ -32,6 +32,22 @@
 #                     on 1 and 2 ranks (coupled and particles-only: integers exact, values to
 #                     the last digit printed, 1e-6 relative for 7 digits); '-' for what the mode
 #                     has not; an unknown column refused (exit 2) naming run.progress_columns
+#   mpi_env           report.json provenance.mpi_env against what the run had: ranks a node; the
+#                     binding by the ranks' affinity masks (--bind-to none: "none", every rank on
+#                     all CPUs; --bind-to core: "exclusive", CPUs of its own); yield_when_idle as
+#                     OMPI_MCA_mpi_yield_when_idle says (1: true, 0: false)
+#   log_header        OUT/log.txt starts with the provenance (version and commit, the command,
+#                     date and host, ranks and nodes, binding and yield, MPI, build, the case),
+#                     also with --quiet, which keeps the case line in the log (off the terminal);
+#                     `coloc --version` names the same commit, compiler, flags and libraries
+#   progress_heat     t_fluid and t_particles (bench/cases/bed-wall-heated.json, particles
+#                     hotter than the water) against the fields and particles written at the last
+#                     step (eps-weighted and mass-weighted means), on 1 and 2 ranks, the particles
+#                     cooling and the water warming row by row; '-' without heat
+#   progress_report   report.json keys as columns (a number, an integer, an array element, a
+#                     bed.* diagnostic): the last row equals report.json; a key the report does
+#                     not have, and one that is not a number, refused (exit 2) naming
+#                     run.progress_columns, the key and the numbers there
 #   pressure_max_iter fluid.pressure.max_iter = 1: a warning and fluid.unconverged_solves; with
 #                     fluid.pressure.on_no_convergence = error: exit 3 naming the key
 set -u
@@ -391,6 +407,146 @@ PYEOF
     [[ -e $work/bad ]] && fail "the refused run made its folder"
     run keys "$coloc" keys run
     expect 0 "run.progress_columns  (a list of names, default [\"step\",\"time\",\"dt\",\"ke\""
+    ;;
+  mpi_env)
+    cores=$(getconf _NPROCESSORS_ONLN)
+    run none "${two[@]}" "$coloc" run "$bed" --out "$work/none" --quiet --set run.steps=1
+    expect 0 "report written"
+    allowed=$("$py" -c "import os; print(len(os.sched_getaffinity(0)))")
+    json "$work/none/report.json" "d['provenance']['mpi_env'] == dict(d['provenance']['mpi_env'], ranks_per_node_min=2, ranks_per_node_max=2, binding='none', cpus_per_rank_min=$allowed, cpus_per_rank_max=$allowed, yield_when_idle=True)"
+    if ((cores >= 2 && allowed >= 2)); then
+      OMPI_MCA_mpi_yield_when_idle=0 run core "$mpiexec" -n 2 --bind-to core "$coloc" run "$bed" \
+        --out "$work/core" --quiet --set run.steps=1
+      expect 0 "report written"
+      json "$work/core/report.json" "d['provenance']['mpi_env']['binding'] == 'exclusive' and d['provenance']['mpi_env']['yield_when_idle'] is False and 1 <= d['provenance']['mpi_env']['cpus_per_rank_max'] < $allowed"
+    fi
+    "$py" -c "import json,sys; print(json.dumps(json.load(open(sys.argv[1]))['provenance']['mpi_env']))" "$work/none/report.json"
+    ;;
+  log_header)
+    run quiet "${two[@]}" "$coloc" run "$bed" --out "$work/q" --quiet --set run.steps=2
+    expect 0 "report written"
+    grep -q "^coloc: case 'ck-bed'" "$log" && fail "--quiet printed the case line"
+    run version "$coloc" --version
+    expect 0 "coloc "
+    "$py" - "$work/q/log.txt" "$work/q/report.json" "$log" "$bed" <<'PYEOF' || fail "the log header"
+import json, re, sys
+lines = open(sys.argv[1]).read().splitlines()
+d = json.load(open(sys.argv[2]))
+version = open(sys.argv[3]).read()
+bed = sys.argv[4]
+p, e = d["provenance"], d["provenance"]["mpi_env"]
+print("\n".join(lines[:8]))
+assert lines[0].startswith(f"coloc: coloc {p['coloc_version']}, git {p['git_commit']}"), lines[0]
+assert lines[1] == f"coloc: command: {p['command_line']}", lines[1]
+assert lines[2].startswith(f"coloc: {p['date']} on {p['host']} ({p['cpu_model']}, {p['cores']} cores"), lines[2]
+assert lines[3].startswith(f"coloc: 2 rank(s) on 1 node(s), 2-2 a node"), lines[3]
+assert f"binding {e['binding']} (rank 0 on CPUs {e['cpus_rank0']})" in lines[3], lines[3]
+assert lines[3].endswith(f"yield when idle {json.dumps(e['yield_when_idle'])}"), lines[3]
+assert lines[4] == f"coloc: MPI: {p['mpi_library']}", lines[4]
+assert lines[5].startswith(f"coloc: build: {p['compiler']} {p['build_type']}, flags {p['compiler_flags']}; hypre {p['hypre_version']}, HDF5 {p['hdf5_version']}"), lines[5]
+assert lines[6] == f"coloc: case file {bed}, output folder " + sys.argv[1][:-len("/log.txt")], lines[6]
+assert any(l.startswith("coloc: case 'ck-bed', mode coupled, 2 rank(s)") for l in lines), "no case line"
+# coloc --version: the same build
+print(version)
+v = dict(re.findall(r"^  ([\w ]+?):\s+(.*)$", version, re.M))
+assert version.startswith(f"coloc {p['coloc_version']}\n"), version
+assert v["git commit"].split()[0] == p["git_commit"], v
+assert v["compiler"] == f"{p['compiler']}, {p['build_type']}", v
+assert v["flags"] == p["compiler_flags"], v
+assert v["MPI"] == p["mpi_library"], v
+assert v["hypre"] == p["hypre_version"] and v["HDF5"].split()[0] == p["hdf5_version"], v
+assert re.match(r"[0-9]+\.[0-9]+\.[0-9]+$", v["SLEEF"]), v
+assert re.match(r"Eigen [0-9.]+, \{fmt\} [0-9.]+, nlohmann_json [0-9.]+, CLI11 [0-9.]+$", v["headers"]), v
+print("log header and --version agree with the report's provenance")
+PYEOF
+    ;;
+  progress_heat)
+    src=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+    heated=$src/bench/cases/bed-wall-heated.json
+    cols=step,t_fluid,t_particles
+    for np in 1 2; do
+      run "np$np" "$mpiexec" -n $np --bind-to none "$coloc" run "$heated" --out "$work/np$np" \
+        --set run.steps=4 --set run.progress_interval_s=1e-9 --set "run.progress_columns=$cols" \
+        --set particles.sources.0.temperature=350 --set output.interval_steps=4 \
+        --set output.snapshot=false
+      expect 0 "report written"
+    done
+    run cold "${two[@]}" "$coloc" run "$bed" --out "$work/cold" --set run.steps=1 \
+      --set run.progress_interval_s=1e-9 --set "run.progress_columns=$cols"
+    expect 0 "report written"
+    "$py" - "$work" <<'PYEOF' || fail "the temperature columns"
+import json, sys
+import h5py
+import numpy as np
+work = sys.argv[1]
+def rows(folder):
+    lines = open(f"{work}/{folder}/log.txt").read().splitlines()
+    h = [i for i, l in enumerate(lines) if l.split() == ["step", "t_fluid", "t_particles"]]
+    assert len(h) == 1, h
+    return [l.split() for l in lines[h[0] + 1:] if l.startswith(" ") and l.split()[0].isdigit()]
+for np_ in (1, 2):
+    r = rows(f"np{np_}")
+    assert [int(x[0]) for x in r] == list(range(5)), r
+    tf = [float(x[1]) for x in r]
+    tp = [float(x[2]) for x in r]
+    print(np_, "ranks:", tf, tp)
+    assert tf[0] == 300 and tp[0] == 350, (tf[0], tp[0])
+    assert all(b > a for a, b in zip(tf, tf[1:])), ("the water does not warm", tf)
+    assert all(b < a for a, b in zip(tp, tp[1:])), ("the particles do not cool", tp)
+    with h5py.File(f"{work}/np{np_}/fields_000004.h5") as f:
+        eps, T = f["eps"][...], f["T"][...]
+    with h5py.File(f"{work}/np{np_}/particles_000004.h5") as f:
+        w, Tp = f["radius"][...] ** 3, f["temperature"][...]   # one material: mass ~ r^3
+    want_f = float((eps * T).sum() / eps.sum())
+    want_p = float((w * Tp).sum() / w.sum())
+    assert abs(tf[-1] - want_f) <= 1e-6 * want_f, (tf[-1], want_f)
+    assert abs(tp[-1] - want_p) <= 1e-6 * want_p, (tp[-1], want_p)
+assert rows("np1") == rows("np2") or all(
+    abs(float(a[i]) - float(b[i])) <= 1e-6 * float(a[i]) for a, b in zip(rows("np1"), rows("np2"))
+    for i in (1, 2))
+c = rows("cold")
+assert all(x[1] == "-" and x[2] == "-" for x in c), c
+print("t_fluid and t_particles are the fields' and particles' means; '-' without heat")
+PYEOF
+    ;;
+  progress_report)
+    cols="step,fluid.cfl_last,particles.count,fluid.drag_force.2,timers.dem_force.calls,bed.bed_height_m,checks.momentum_balance"
+    run rep "${two[@]}" "$coloc" run "$bed" --out "$work/rep" --set run.steps=3 \
+      --set run.progress_interval_s=1e-9 --set "run.progress_columns=$cols"
+    expect 0 "report written"
+    "$py" - "$work/rep" "$cols" <<'PYEOF' || fail "report columns"
+import json, sys
+folder, cols = sys.argv[1], sys.argv[2].split(",")
+lines = open(f"{folder}/log.txt").read().splitlines()
+h = [i for i, l in enumerate(lines) if l.split() == cols]
+assert len(h) == 1, ("one header", h)
+rows = [dict(zip(cols, l.split())) for l in lines[h[0] + 1:]
+        if l.startswith(" ") and l.split()[0].isdigit() and len(l.split()) == len(cols)]
+assert [int(r["step"]) for r in rows] == [0, 1, 2, 3], rows
+d = json.load(open(f"{folder}/report.json"))
+last = rows[-1]
+def val(key):
+    v = d
+    for k in key.split("."):
+        v = v[int(k)] if isinstance(v, list) else v[k]
+    return v
+for c in cols[1:]:
+    want = val(c)
+    if isinstance(want, int):
+        assert int(last[c]) == want, (c, last[c], want)
+    else:
+        assert abs(float(last[c]) - want) <= 1e-6 * abs(want) + 1e-300, (c, last[c], want)
+print("last row = report.json:", last)
+PYEOF
+    run nokey "${two[@]}" "$coloc" run "$bed" --out "$work/nokey" --set run.steps=1 \
+      --set run.progress_columns=step,fluid.cfl_lats
+    expect 2 "run.progress_columns: 'fluid.cfl_lats' is no key of this run's report; numbers under 'fluid': fluid.steps,"
+    run notnum "${two[@]}" "$coloc" run "$bed" --out "$work/notnum" --set run.steps=1 \
+      --set run.progress_columns=step,fluid.drag_force
+    expect 2 "run.progress_columns: 'fluid.drag_force' is not a number of this run's report; numbers under 'fluid.drag_force': fluid.drag_force.0, fluid.drag_force.1, fluid.drag_force.2"
+    run dots "${two[@]}" "$coloc" run "$bed" --out "$work/dots" --set run.steps=1 \
+      --set run.progress_columns=step,fluid..x
+    expect 2 "run.progress_columns: 'fluid..x' is not a key path of report.json"
     ;;
   *) fail "unknown test $test" ;;
 esac

@@ -54,7 +54,8 @@ def main():
     if not a.compare_only:
         run([a.reference] + common + ["--out", ref])
         run([sys.executable, os.path.join(ROOT, "bench", "scripts", "smpi_run.py"), "--ranks",
-             str(a.ranks), "--smpi-build", a.smpi_build, "--"] + common +
+             str(a.ranks), "--smpi-build", a.smpi_build, "--real-build",
+             os.path.dirname(os.path.abspath(a.reference)), "--"] + common +
             ["--set", f"partition.strategy={a.strategy}", "--out", sim])
 
     rows_a = list(csv.DictReader(open(os.path.join(ref, "series.csv"))))
@@ -93,6 +94,13 @@ def main():
     if not (prov["simulated"] is True and prov["mpi_library"].startswith("SMPI")
             and prov["oversubscribed"] is False and prov["cores_used"] == a.ranks):
         bad.append(f"report.json provenance of the simulated run: {prov}")
+    # the calibration of the simulation (smpi_run.py): an empty burst's charge at this rank
+    # count, a real call's cost from the reference build's bench_mpi_calls, their difference
+    cal = prov.get("smpi_calibration", {})
+    if not (cal.get("empty_burst_s", 0) > 0 and cal.get("real_call_s", 0) > 0
+            and cal.get("iprobe_s", 0) > 0 and cal.get("test_s", 0) > 0 and cal.get("ranks") == a.ranks
+            and abs(cal.get("offset_s", -1) - max(0.0, cal["empty_burst_s"] - cal["real_call_s"])) < 1e-12):
+        bad.append(f"report.json provenance.smpi_calibration: {cal}")
     if rep_a["provenance"]["simulated"] is not False:
         bad.append("the serial reference says it is simulated")
     if rep_a["particles"]["count"] != rep_b["particles"]["count"]:

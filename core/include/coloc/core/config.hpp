@@ -67,6 +67,7 @@ struct KeySpec {
   Json defaultValue;                 // null: required
   Range range;                       // numbers, integers, and each component of vectors
   std::vector<std::string> choices;  // strings: allowed values (empty: any)
+  bool dottedNames = false;          // NameList: names with a '.' pass too (the caller checks them)
   std::string help;
   std::shared_ptr<Schema> object;                        // Object
   std::map<std::string, std::shared_ptr<Schema>> items;  // List (by "type", or "" for any)
@@ -89,9 +90,10 @@ class Schema {
                      const std::string& help, Range r = Range::any());
   /// A non-empty list of names, each one of `choices`: a JSON list of strings, or one string of
   /// names separated by commas or spaces (`--set run.progress_columns=step,time`). Resolved to
-  /// the list.
+  /// the list. With `dottedNames`, a name holding a '.' passes too (a key path the caller
+  /// checks, e.g. a report.json key as a progress column).
   Schema& nameList(const std::string& path, std::vector<std::string> def, const std::string& help,
-                   std::vector<std::string> choices);
+                   std::vector<std::string> choices, bool dottedNames = false);
   /// An optional object whose keys depend on its "type" (e.g. a boundary condition).
   Schema& variant(const std::string& path, std::map<std::string, Schema> byType,
                   const std::string& defaultType, const std::string& help);

@@ -15,10 +15,18 @@ namespace coloc {
 /// oversubscribed (some node runs more ranks than it has cores online), cores_used (the sum over
 /// nodes of min(ranks, cores): the cores of a figure of merit), coloc_version,
 /// git_commit and git_dirty (of the source tree at build time; "unknown" outside a git
-/// checkout), compiler, compiler_flags, build_type, mpi_library (MPI_Get_library_version) and
-/// command_line. The versions of the libraries core does not link (hypre, HDF5) are the
-/// caller's to add.
+/// checkout), compiler, compiler_flags, build_type, mpi_library (MPI_Get_library_version),
+/// mpi_env (what changes timings: ranks_per_node_min/max; binding, how each node's ranks sit on
+/// its CPUs by their affinity masks: "exclusive", "overlapping" or "none"; cpus_per_rank_min/max;
+/// cpus_rank0; yield_when_idle, Open MPI's mpi_yield_when_idle through MPI_T, true, false or
+/// "unknown") and command_line. The versions of the libraries core does not link (hypre, HDF5)
+/// are the caller's to add.
 Json provenance(const Comm& comm, const std::string& commandLine);
+
+/// The build, for `coloc --version` (core's part, one "  name: value" line each after the
+/// first line "coloc VERSION"): git commit, compiler and build type, flags, MPI library. The
+/// caller adds the libraries core does not link.
+std::string buildDescription();
 
 /// The command line as a shell would take it back: each argument quoted where it needs to be.
 std::string commandLineText(int argc, const char* const* argv);

@@ -31,6 +31,7 @@ enum class Phase : std::uint8_t {
   FluidBoundary,          // boundary conditions on the fields
   FluidHalo,              // intra-physics halo exchanges of the fluid
   FluidPressureAssemble,  // matrix and right-hand side of the pressure equation
+  FluidPressureSetup,     // hypre's multigrid and PCG set-up on a new matrix (not every step)
   FluidPressureSolve,     // hypre PCG+PFMG
   FluidProject,           // velocity correction
   FluidCellFields,        // cell-centred velocity and pressure gradient the coupling samples
@@ -66,6 +67,7 @@ inline constexpr std::array<PhaseInfo, static_cast<std::size_t>(Phase::Count)> k
     {"fluid_boundary", Category::Fluid},
     {"fluid_halo", Category::Fluid, false},
     {"fluid_pressure_assemble", Category::Fluid},
+    {"fluid_pressure_setup", Category::Fluid},
     {"fluid_pressure_solve", Category::Fluid},
     {"fluid_project", Category::Fluid},
     {"fluid_cell_fields", Category::Fluid},

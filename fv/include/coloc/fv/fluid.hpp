@@ -54,6 +54,13 @@ struct FluidCounters {
   bool heatStarted = false;
   long long steps = 0, itSum = 0, solves = 0, setups = 0;
   long long itMax = 0, itLast = 0;
+  // The pressure set-up reuse (fluid.pressure.setup_interval > 1): the dt of the operator the
+  // multigrid hierarchy was set up on (< 0: none; its eps and K are the state fields eps_setup
+  // and K_setup), the operators it has served since, the iterations of its first solve (-1: not
+  // yet), whether a solve asked for a new set-up, and the dt of the current operator (< 0: none).
+  double setupDt = -1, matrixDt = -1;
+  long long setupReuses = 0, setupIterations = -1;
+  bool setupDue = false;
   long long unconverged = 0;  // pressure solves of this run that ended above the tolerance
   bool haveOld = false;       // an AB2 history exists (the next step uses AB2)
   bool ratesStale = false;    // nextDt() recomputes the velocity rate first
@@ -88,6 +95,9 @@ struct FluidFields {
   // with CouplingInputs::heatCoefficient only (allocated by the first step that gives one):
   CellField heatCoefficient;  // sum H of the cell's particles (W/K)
   CellField Tmean;            // mean of T over the last step's sub-steps (K); halo ghosts current
+  // fluid.pressure.setup_interval > 1 only (empty otherwise): eps and K when the pressure's
+  // multigrid hierarchy was last set up (a restart or re-balance sets it up again from them).
+  CellField epsSetup, KSetup;
 };
 
 class FluidSolver {
@@ -135,8 +145,10 @@ class FluidSolver {
   std::array<Field3<double>, 3>& history();
   /// Restore: after the owned values of edit() (u, p, eps, epsOld, K, KUp) and of history()
   /// were overwritten (e.g. read from a checkpoint on any decomposition), refresh every ghost
-  /// layer as the step leaves them and take the counters; the next step rebuilds the pressure
-  /// matrix. With the same decomposition the run then continues bitwise identically. Collective.
+  /// layer as the step leaves them and take the counters. The pressure's multigrid hierarchy is
+  /// set up again on the operator it was set up on (eps_setup, K_setup, setupDt; none: the next
+  /// step sets one up). With the same decomposition the run then continues bitwise identically.
+  /// Collective.
   void restoreState(const FluidCounters& c);
   /// The fluid's restart table: every array that checkpoints write and read and that a
   /// re-balance remaps, declared once (forEachStateField below walks it).
@@ -145,6 +157,9 @@ class FluidSolver {
     int stagger;       // -1: cell centred; 0, 1, 2: faces normal to that axis
     int components;    // 1, or 3: a cell vector (one dataset)
     bool fraction;     // a fluid fraction: restored values must lie in (0, 1]
+    // a checkpoint may lack it (written before it existed or with other settings): the reader
+    // then leaves the arrays as they are and tells restoreState (FluidCounters) what that means
+    bool optional = false;
   };
 
   /// Cell-centred velocity (mean of the two faces) with one ghost layer filled.
@@ -208,6 +223,10 @@ void forEachStateField(Solver& fluid, Fn&& fn) {
   if (!f.T.data().empty()) {  // fluid.heat (explicit scheme: no history beyond T)
     visit({"T", -1, 1, false}, &f.T);
     visit({"heat_source", -1, 1, false}, &f.heatSource);
+  }
+  if (!f.epsSetup.data().empty()) {  // the pressure set-up's operator (setup_interval > 1)
+    visit({"eps_setup", -1, 1, true, true}, &f.epsSetup);
+    visit({"K_setup", -1, 1, false, true}, &f.KSetup);
   }
 }
 
