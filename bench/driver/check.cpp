@@ -12,6 +12,7 @@
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/error.hpp"
+#include "coloc/core/files.hpp"
 #include "coloc/core/provenance.hpp"
 #include "coloc/core/run_config.hpp"
 #include "coloc/coupling/case_checks.hpp"
@@ -126,6 +127,9 @@ int checkCase(const CheckOptions& opts) {
                       fmt::format("{} is not a rank count coloc lays out (1 .. {})", N, 1 << 24));
   const Comm self(MPI_COMM_SELF);
   const Config cfg = Config::load(self, opts.casePath, opts.overrides, coupling::caseSchema());
+  // --draw PATH: a new file, or an SVG of an earlier check (never the case file, a link or a
+  // device: coloc/core/files.hpp), refused before the work
+  if (!opts.drawPath.empty()) checkUserFile("--draw", opts.drawPath, "<?xml");
   const std::vector<std::string> notes = coupling::checkCase(cfg);
   const GlobalGrid g = gridFromConfig(cfg);
   const RunMode mode = runMode(cfg);

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/files.hpp"
 #include "coloc/io/xdmf.hpp"
 
 namespace coloc {
@@ -220,17 +221,9 @@ void writeLayoutSvg(const std::string& path, const GlobalGrid& g, const LayoutPl
     << "fill=\"#666\">" << xmlEscape(caption) << "</text>\n"
     << "</svg>\n";
 
-  const std::string tmp = path + ".tmp";
-  std::FILE* out = std::fopen(tmp.c_str(), "w");
-  if (!out) throw IoError("cannot create '" + tmp + "': " + std::strerror(errno));
-  const std::string text = o.str();
-  const bool ok = std::fwrite(text.data(), 1, text.size(), out) == text.size();
-  const int why = errno;
-  if (std::fclose(out) != 0 || !ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string msg = std::strerror(ok ? errno : why);
-    std::remove(tmp.c_str());
-    throw IoError("cannot write '" + path + "': " + msg);
-  }
+  // The path the user named: replaced only when it holds an SVG already, never the case file, a
+  // link or a device (coloc/core/files.hpp).
+  writeUserFile("--draw", path, o.str(), "<?xml");
 }
 
 }  // namespace coloc

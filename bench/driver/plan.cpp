@@ -4,11 +4,11 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "coloc/core/config.hpp"
 #include "coloc/core/error.hpp"
+#include "coloc/core/files.hpp"
 #include "coloc/core/report.hpp"
 #include "coloc/core/timers.hpp"
 #include "coloc/coupling/plan.hpp"
@@ -51,11 +51,17 @@ int planCase(const PlanOptions& opts) {
       opts.outDir.empty() ? (std::filesystem::path("out") / cfg.string("name") / "plan").string()
                           : opts.outDir;
   makeDirectories(outDir);
+  // Regular files in the folder, never written through a link (coloc/core/files.hpp): checked
+  // before the work, written whole at the end.
+  const std::string csvPath = (std::filesystem::path(outDir) / "plan.csv").string();
+  const std::string jsonPath = (std::filesystem::path(outDir) / "plan.json").string();
+  for (const std::string& path : {csvPath, jsonPath})
+    if (const std::string why = writeTargetProblem(path); !why.empty()) throw IoError(why);
   const coupling::PlanCase pc = coupling::planCase(cfg);
   const double tSetup = MPI_Wtime() - t0;
 
   Json layouts = Json::array();
-  std::ofstream csv(std::filesystem::path(outDir) / "plan.csv");
+  std::ostringstream csv;
   csv << "strategy,ranks,rank,cells,particles,proxies,ghost_cells,dem_ghosts,cost";
   for (const auto n : kTrafficNames) csv << "," << n << "_bytes," << n << "_messages";
   csv << "\n";
@@ -168,7 +174,8 @@ int planCase(const PlanOptions& opts) {
                {"layouts", layouts}};
   plan["wall_s"] = MPI_Wtime() - t0;
   plan["peak_rss_bytes"] = peakRssBytes();
-  std::ofstream(std::filesystem::path(outDir) / "plan.json") << plan.dump(1) << "\n";
+  writeFileWhole(csvPath, csv.str());
+  writeFileWhole(jsonPath, plan.dump(1) + "\n");
   std::printf("coloc plan: wrote %s/plan.json and plan.csv (%.2f s, peak RSS %.2f GiB)\n",
               outDir.c_str(), MPI_Wtime() - t0,
               static_cast<double>(peakRssBytes()) / (1024.0 * 1024.0 * 1024.0));

@@ -42,13 +42,15 @@ void diffConfig(const Json& a, const Json& b, const std::string& path, Differenc
 
 /// What a restart keeps from its checkpoint although the case gives another value: what is
 /// baked into the state (the particles: their sources, radii and masses, i.e. the materials'
-/// density; the fluid's initial condition). Every other key is taken from the case.
+/// density; the fluid's initial condition: velocity and temperature). Every other key is taken
+/// from the case.
 bool keptFromCheckpoint(const std::string& key) {
   const auto under = [&](const char* p) {
     const std::string s(p);
     return key == s || key.rfind(s + ".", 0) == 0;
   };
-  if (under("particles.sources") || under("particles.seed") || under("fluid.initial_velocity"))
+  if (under("particles.sources") || under("particles.seed") || under("fluid.initial_velocity") ||
+      under("fluid.initial_temperature"))
     return true;
   return key.rfind("particles.materials.", 0) == 0 && key.ends_with(".density");
 }

@@ -6,12 +6,12 @@
 
 #include <fmt/format.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 
@@ -80,11 +80,14 @@ void libraryAborted() {
       if (lastWords.provenance) report.set("provenance", *lastWords.provenance);
       const std::filesystem::path dir(lastWords.outDir);
       const std::string tmp = (dir / ("report.rank" + std::to_string(rank) + ".json.tmp")).string();
-      {
-        std::ofstream out(tmp, std::ios::trunc);
-        out << report.json().dump(2) << "\n";
-      }
-      std::filesystem::rename(tmp, dir / "report.json");
+      const std::string text = report.json().dump(2) + "\n";
+      const int fd = createFresh(tmp);  // never through a link (coloc/core/files.hpp)
+      const bool whole = writeAll(fd, text) == 0;
+      ::close(fd);
+      if (whole)
+        (void)publishFile(tmp, (dir / "report.json").string());
+      else
+        ::unlink(tmp.c_str());
     } catch (...) {
       // nothing more can be done here: the message above stands
     }
@@ -111,6 +114,8 @@ class Run {
   Run& operator=(const Run&) = delete;
 
   int prepareFolders();
+  void openLog();
+  void sayEarlierKept();
   int setUp();
   int stepLoop();
   int finish(std::optional<SnapshotJob>& snapshot);
@@ -150,6 +155,9 @@ class Run {
   } clearLastWords_;
   RunFolders folders_;
   FolderLocks locks_;
+  std::vector<std::string> earlierFiles_;  // rank 0: an earlier run's files, for --overwrite
+  bool keepEarlier_ = false;               // every rank: they stay until the set-up has passed
+  bool logOpen_ = false;                   // rank 0: OUT/log.txt is open
 
   // What report.json says of the run, however it ends.
   std::unique_ptr<coupling::Simulation> simulation_;
@@ -205,12 +213,16 @@ Run::Run(const Comm& world, const RunOptions& opts)
 /// 1. The output folders (rank 0): made; locked against a second run for as long as this one
 /// lasts; the checkpoint kept inside them and off the --restart file; an earlier run's files
 /// refused (or removed with --overwrite); what a previous run left there that would mislead
-/// removed. A --restart that is no regular file (a FIFO would block the read) is refused before
-/// anything is made. Then the log file opens.
+/// removed. A --restart that is no regular file (a FIFO would block the read), and a file the run
+/// would write that is not one (coloc/core/files.hpp), are refused before anything is made. Then
+/// the log file opens, unless --overwrite keeps an earlier run's files until the set-up passed.
 int Run::prepareFolders() {
-  std::vector<std::string> earlierFiles;  // rank 0: an earlier run's files, for --overwrite
+  std::vector<std::string>& earlierFiles = earlierFiles_;
   auto v = phase(channel_, kInputErrorStatus, [&] {
     onRoot(world_, [&] {
+      // Every file the run writes: a name it can write, and nothing there that is not a regular
+      // file (coloc/core/files.hpp); before any folder is made.
+      checkWritePaths(folders_);
       if (opts_.restart.empty()) return;
       if (const std::string why = notRegularFile(opts_.restart); !why.empty())
         throw ConfigError("--restart",
@@ -242,19 +254,34 @@ int Run::prepareFolders() {
     });
   if (!v.failed())
     v = phase(channel_, kIoErrorStatus, [&] {
+      // --overwrite: the earlier run's files stay until this run is set up (setUp)
+      keepEarlier_ = world_.broadcast(std::string(earlierFiles.empty() ? "" : "1")) == "1";
+      if (keepEarlier_) lastWords.outDir.clear();  // (no report over the earlier run's, either)
       if (!root_) return;
-      removeRunFiles(earlierFiles);
       removeStaleFiles(folders_);
       fault::point("outdir", 0);
-      log_.open((std::filesystem::path(outDir_) / "log.txt").string(),
-                restartInFolders(folders_, opts_.restart),
-                logHeader(prov_, opts_.casePath, outDir_));
+      if (!keepEarlier_) openLog();
     });
   if (v.failed()) {
     say(v, "");
+    if (keepEarlier_) sayEarlierKept();
     return v.code;
   }
   return 0;
+}
+
+void Run::sayEarlierKept() {
+  if (root_)
+    log_.err(
+        "coloc: the earlier run's files in '{}' are left as they were (--overwrite removes them "
+        "only once the new run is set up); no report written\n",
+        outDir_);
+}
+
+void Run::openLog() {
+  log_.open((std::filesystem::path(outDir_) / "log.txt").string(),
+            restartInFolders(folders_, opts_.restart), logHeader(prov_, opts_.casePath, outDir_));
+  logOpen_ = true;
 }
 
 /// report.json, however the run ends (collective; a failure to write it is printed, the exit
@@ -295,50 +322,71 @@ std::string Run::writeReport(const char* status, int code, const std::string& er
 /// 2. Set-up: the physics (fresh, or restarted from --restart), the series, the output of
 /// step 0, the progress table's header and first row.
 int Run::setUp() {
-  const auto v = phase(
-      channel_, kInputErrorStatus,
-      [&] {
-        if (opts_.restart.empty())
-          simulation_ = std::make_unique<coupling::Simulation>(world_, cfg_);
-        else
-          simulation_ = std::make_unique<coupling::Simulation>(
-              cfg_, coupling::Simulation::restartLayouts(world_, cfg_, opts_.restart),
-              opts_.restart);
-        setupWall_ = MPI_Wtime() - t0_;
-        const long long particleCount =
-            simulation_->particles() ? simulation_->particles()->globalCount() : 0;  // collective
-        if (root_) {
-          // With --quiet these lines go to the log only.
-          const auto& dec = simulation_->decomposition();
-          const std::string caseLine = fmt::format(
-              "coloc: case '{}', mode {}, {} rank(s) as {}, {} cells, {} particles, "
-              "set-up {:.2f} s\n",
-              cfg_.string("name"), runModeName(simulation_->mode()), dec.size(), dec.shape(),
-              static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall_);
-          const std::string restartLine =
-              opts_.restart.empty()
-                  ? std::string()
-                  : fmt::format("coloc: restarted from {} at step {}, t = {:.9g} s\n",
-                                opts_.restart, simulation_->steps(), simulation_->time());
-          if (opts_.quiet)
-            log_.file("{}{}", caseLine, restartLine);
-          else
-            log_.out("{}{}", caseLine, restartLine);
-        }
-        if (!opts_.restart.empty()) {
-          restartReport_ = accountRestart(world_, opts_.restart, cfg_, log_);
-          refuseEmptyRestart(cfg_, opts_.restart, simulation_->steps(), simulation_->time());
-        }
-        progress_.emplace(world_, cfg_, opts_.quiet ? 0.0 : cfg_.number("run.progress_interval_s"),
-                          log_);
-        series_.emplace(world_, (std::filesystem::path(outDir_) / "series.csv").string(),
-                        *simulation_, cfg_);
-        output_.emplace(simulation_->decomposition(), outputOptions_);
-        simulation_->writeOutput(*output_);
-        progress_->start(*simulation_);  // the header and the first row
-        request_ = progress_->request();
-      },
-      nullptr, &request_);
+  // a. The physics: what an input can still refuse (particles that do not fit, a restart file
+  // that does not match). An earlier run that --overwrite replaces is untouched until it passed.
+  auto v = phase(channel_, kInputErrorStatus, [&] {
+    if (opts_.restart.empty())
+      simulation_ = std::make_unique<coupling::Simulation>(world_, cfg_);
+    else
+      simulation_ = std::make_unique<coupling::Simulation>(
+          cfg_, coupling::Simulation::restartLayouts(world_, cfg_, opts_.restart), opts_.restart);
+    setupWall_ = MPI_Wtime() - t0_;
+    const long long particleCount =
+        simulation_->particles() ? simulation_->particles()->globalCount() : 0;  // collective
+    if (root_) {
+      // With --quiet these lines go to the log only.
+      const auto& dec = simulation_->decomposition();
+      const std::string caseLine = fmt::format(
+          "coloc: case '{}', mode {}, {} rank(s) as {}, {} cells, {} particles, "
+          "set-up {:.2f} s\n",
+          cfg_.string("name"), runModeName(simulation_->mode()), dec.size(), dec.shape(),
+          static_cast<long long>(dec.grid().cellCount()), particleCount, setupWall_);
+      const std::string restartLine =
+          opts_.restart.empty()
+              ? std::string()
+              : fmt::format("coloc: restarted from {} at step {}, t = {:.9g} s\n", opts_.restart,
+                            simulation_->steps(), simulation_->time());
+      if (opts_.quiet)
+        log_.file("{}{}", caseLine, restartLine);
+      else
+        log_.out("{}{}", caseLine, restartLine);
+    }
+    if (!opts_.restart.empty()) {
+      restartReport_ = accountRestart(world_, opts_.restart, cfg_, log_);
+      refuseEmptyRestart(cfg_, opts_.restart, simulation_->steps(), simulation_->time());
+    }
+  });
+  if (v.failed() && keepEarlier_) {
+    say(v, "");
+    sayEarlierKept();
+    return v.code;
+  }
+  // b. The run has started: the earlier run's files go (--overwrite), and the previous report of
+  // a run continued in place; the log opens.
+  if (!v.failed())
+    v = phase(channel_, kIoErrorStatus, [&] {
+      lastWords.outDir = outDir_;
+      if (!root_) return;
+      removeRunFiles(earlierFiles_);
+      earlierFiles_.clear();
+      removePreviousReport(folders_);
+      if (!logOpen_) openLog();
+    });
+  // c. What the run writes from its start: the series, the output of step 0, the progress table.
+  if (!v.failed())
+    v = phase(
+        channel_, kInputErrorStatus,
+        [&] {
+          progress_.emplace(world_, cfg_,
+                            opts_.quiet ? 0.0 : cfg_.number("run.progress_interval_s"), log_);
+          series_.emplace(world_, (std::filesystem::path(outDir_) / "series.csv").string(),
+                          *simulation_, cfg_);
+          output_.emplace(simulation_->decomposition(), outputOptions_);
+          simulation_->writeOutput(*output_);
+          progress_->start(*simulation_);  // the header and the first row
+          request_ = progress_->request();
+        },
+        nullptr, &request_);
   if (v.failed()) {
     say(v, "");
     writeReport("failed", v.code, v.message, "", 0);

@@ -14,6 +14,7 @@
 #include <filesystem>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/files.hpp"
 
 namespace coloc {
 namespace fs = std::filesystem;
@@ -98,6 +99,28 @@ void checkRunFiles(const RunFolders& f, const std::string& restart) {
     throw ConfigError("--restart", "'" + restart + "' is " + role +
                                        " in this run's output folder, which the run writes or "
                                        "removes: copy it elsewhere and restart from the copy");
+}
+
+void checkWritePaths(const RunFolders& f) {
+  const fs::path out(f.outDir), data(f.dataDir);
+  const auto check = [](const std::string& key, const fs::path& path) {
+    if (const std::string why = writeTargetProblem(path.string()); !why.empty())
+      throw ConfigError(key, why);
+  };
+  for (const char* name : {"report.json", "series.csv", "log.txt", "snapshot.png",
+                           "rebalance.tmp.h5", "rebalance.tmp.h5.tmp"})
+    check("--out", out / name);
+  // the output of the largest step a run can have (19 digits): the longest names
+  const std::string big(19, '9');
+  for (const std::string& name : {std::string("fields.xmf"), std::string("particles.xmf"),
+                                  "fields_" + big + ".h5", "particles_" + big + ".h5"})
+    check("output.dir", data / name);
+  CheckpointOptions ck;
+  ck.path = (data / fs::path(f.checkpointFile).lexically_normal()).string();
+  for (const long long step : {0LL, 999999999999999999LL}) {
+    check("output.checkpoint_file", ck.pathAt(step));
+    check("output.checkpoint_file", failedCheckpointPath(ck.pathAt(step)));
+  }
 }
 
 bool restartInFolders(const RunFolders& f, const std::string& restart) {
@@ -193,11 +216,16 @@ void removeRunFiles(const std::vector<std::string>& files) {
   }
 }
 
+void removePreviousReport(const RunFolders& f) {
+  std::error_code ec;
+  for (const char* name : {"report.json", "series.csv"}) fs::remove(fs::path(f.outDir) / name, ec);
+}
+
 void removeStaleFiles(const RunFolders& f) {
   std::error_code ec;
   const fs::path out(f.outDir), data(f.dataDir);
-  for (const char* name : {"report.json", "series.csv", "report.json.tmp", "series.csv.tmp",
-                           "rebalance.tmp.h5", "rebalance.tmp.h5.tmp"})
+  for (const char* name :
+       {"report.json.tmp", "series.csv.tmp", "rebalance.tmp.h5", "rebalance.tmp.h5.tmp"})
     fs::remove(out / name, ec);
   const fs::path rel = fs::path(f.checkpointFile).lexically_normal();
   const std::string ck = rel.filename().string() + ".tmp";

@@ -41,6 +41,12 @@ class FolderLocks {
 /// writes or removes in its folders (other than its own checkpoint name). The folders exist.
 void checkRunFiles(const RunFolders& f, const std::string& restart);
 
+/// Throws ConfigError naming --out, output.dir or output.checkpoint_file when a file the run
+/// writes there cannot be written by coloc's rules (coloc/core/files.hpp): a name or path too
+/// long (the output of the largest step included), or something there that is not a regular
+/// file (a symbolic link, a folder, a FIFO, a device). Before anything is written.
+void checkWritePaths(const RunFolders& f);
+
 /// The restart file `restart` (may be empty) lies in one of the run's folders (--out, output.dir
 /// or the checkpoint's folder): the run continues the run that wrote it, in the same folders.
 bool restartInFolders(const RunFolders& f, const std::string& restart);
@@ -57,14 +63,18 @@ std::vector<std::string> previousRunFiles(const RunFolders& f);
 /// another folder, --restart of a checkpoint there).
 void refuseMixedRuns(const RunFolders& f, const std::vector<std::string>& files);
 
-/// Removes `files` (--overwrite: the earlier run's files, before anything new is written).
+/// Removes `files` (--overwrite: the earlier run's files, once the new run is set up and before
+/// it writes anything of its own).
 /// Throws IoError naming the first that cannot be removed.
 void removeRunFiles(const std::vector<std::string>& files);
 
-/// Removes what would mislead about this run: the previous run's report.json and series.csv,
-/// and the temporary files that only coloc itself makes (report.json.tmp, series.csv.tmp,
+/// Removes the temporary files that only coloc itself makes (report.json.tmp, series.csv.tmp,
 /// fields.xmf.tmp, fields_NNNNNN.h5.tmp, <checkpoint>.tmp, rebalance.tmp.h5, ...) and that a
 /// killed run left. Nothing else: other programs' files stay. Checkpoints and output are kept.
 void removeStaleFiles(const RunFolders& f);
+
+/// Removes the previous report.json and series.csv of --out (a restart in place continues that
+/// run: they would mislead about this one). Once the new run is set up.
+void removePreviousReport(const RunFolders& f);
 
 }  // namespace coloc

@@ -1,12 +1,37 @@
 // Rank 0's messages, on the terminal and in OUT/log.txt (run_log.hpp).
 #include "run_log.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/files.hpp"
 
 namespace coloc {
+
+namespace {
+
+/// The log file, appended to (or emptied first), a regular file only and never through a
+/// symbolic link (coloc/core/files.hpp); throws IoError naming it.
+std::FILE* openLog(const std::string& path, bool truncate) {
+  const int fd = openForAppend(path);
+  if (truncate && ::ftruncate(fd, 0) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw IoError("cannot empty the log file '" + path + "': " + std::strerror(e));
+  }
+  std::FILE* f = ::fdopen(fd, "a");
+  if (!f) {
+    const int e = errno;
+    ::close(fd);
+    throw IoError("cannot open the log file '" + path + "': " + std::strerror(e));
+  }
+  return f;
+}
+
+}  // namespace
 
 RunLog::RunLog(bool root) : root_(root) {
   if (root_) text_.reserve(4096);
@@ -51,8 +76,8 @@ std::string logHeader(const Json& p, const std::string& casePath, const std::str
 void RunLog::open(const std::string& path, bool append, const std::string& header) {
   if (!root_) return;
   if (file_) std::fclose(file_);
-  file_ = std::fopen(path.c_str(), append ? "ae" : "we");
-  if (!file_) throw IoError("cannot create the log file '" + path + "': " + std::strerror(errno));
+  file_ = nullptr;
+  file_ = openLog(path, !append);
   if (append) std::fputs("coloc: ---- the run continues (--restart) ----\n", file_);
   std::fwrite(header.data(), 1, header.size(), file_);
   std::fwrite(pending_.data(), 1, pending_.size(), file_);
@@ -64,8 +89,8 @@ void RunLog::open(const std::string& path, bool append, const std::string& heade
 void RunLog::reopen(const std::string& path) {
   if (!root_) return;
   if (file_) std::fclose(file_);
-  file_ = std::fopen(path.c_str(), "ae");
-  if (!file_) throw IoError("cannot open the log file '" + path + "': " + std::strerror(errno));
+  file_ = nullptr;
+  file_ = openLog(path, false);
   std::fwrite(pending_.data(), 1, pending_.size(), file_);
   std::fflush(file_);
   pending_.clear();

@@ -14,6 +14,7 @@
 
 #include "coloc/core/error.hpp"
 #include "coloc/core/fault.hpp"
+#include "coloc/core/files.hpp"
 
 namespace coloc {
 
@@ -54,15 +55,22 @@ Series::Series(const Comm& comm, const std::string& path, coupling::Simulation& 
   for (const auto& c : bedDiagnosticsColumns()) header += "," + c;
   header += "\n";
   line_.reserve(32 * (4 + 9 * ids_.size() + bedDiagnosticsColumns().size()));
+  // A regular file only, made afresh as series.csv.tmp (never through a link) and renamed over
+  // a regular file or nothing (coloc/core/files.hpp); the rows are appended to it after that.
+  if (const std::string why = writeTargetProblem(path); !why.empty()) throw IoError(why);
   const std::string tmp = path + ".tmp";
-  fd_ = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw IoError("cannot create '" + tmp + "': " + std::strerror(errno));
-  if (!append(header) || ::rename(tmp.c_str(), path.c_str()) != 0) {
+  fd_ = createFresh(tmp);
+  if (::fcntl(fd_, F_SETFL, O_APPEND) != 0 || !append(header)) {
     const std::string why = std::strerror(errno);
     ::close(fd_);
     fd_ = -1;
     ::unlink(tmp.c_str());
     throw IoError("cannot write '" + path + "': " + why);
+  }
+  if (const std::string err = publishFile(tmp, path); !err.empty()) {
+    ::close(fd_);
+    fd_ = -1;
+    throw IoError(err);
   }
 }
 

@@ -34,6 +34,9 @@ void installStopSignals() {
   sigaction(SIGTERM, &a, nullptr);
   sigaction(SIGINT, &a, nullptr);
   std::signal(SIGXFSZ, SIG_IGN);  // a write past RLIMIT_FSIZE fails with EFBIG: an I/O error
+  // A terminal that went away (`coloc run ... | head -1`) is no reason to end the run without
+  // its report: the lines to it fail (EPIPE) and the run goes on, its log and report complete.
+  std::signal(SIGPIPE, SIG_IGN);
 }
 
 int stopSignal() {

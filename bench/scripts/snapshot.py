@@ -25,6 +25,7 @@ import json
 import os
 import re
 import sys
+import tempfile
 
 
 def output_steps(out_dir, series):
@@ -64,6 +65,21 @@ def crop_top(particles_up, lo, length, spacing, faces):
     if inner:
         want = max(want, max(inner) + 2 * spacing)
     return want if want < lo + 0.7 * length else top
+
+
+def png_target_problem(png):
+    """Why PNG cannot be written (what is there is not a regular file, or is not a PNG); None
+    when it can: coloc replaces only a picture of its own kind, never through a link."""
+    if not os.path.lexists(png):
+        return None
+    if os.path.islink(png) or not os.path.isfile(png):
+        return "'%s' exists and is not a regular file (a link, a folder, a FIFO or a device): " \
+            "not replaced; remove it or give another --png" % png
+    with open(png, "rb") as f:
+        if f.read(8) != b"\x89PNG\r\n\x1a\n":
+            return "'%s' exists and is not a PNG picture: not replaced; remove it or give " \
+                "another --png" % png
+    return None
 
 
 def vertical_axis(report, length):
@@ -125,6 +141,11 @@ def main():
         return 2
     step = args.step if args.step is not None else steps[-1]
     fpath = os.path.join(args.out_dir, "fields_%06d.h5" % step)
+    png = args.png or os.path.join(args.out_dir, "snapshot.png")
+    why = png_target_problem(png)
+    if why:
+        print("snapshot.py: %s" % why, file=sys.stderr)
+        return 1
     try:
         with h5py.File(fpath, "r") as f:
             origin = np.array(f.attrs["origin"], dtype=float)
@@ -242,13 +263,26 @@ def main():
             len(boxes), strategy, "; particles coloured by their rank (left)" if px is not None
             else "")
     fig.suptitle("%s: step %d, t = %.6g s\n%s" % (case, step, time, sub), fontsize=10)
-    png = args.png or os.path.join(args.out_dir, "snapshot.png")
     # where the picture comes from: the run's report.json provenance (else the fields file's)
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import provenance
     has = provenance.of_report(report) is not None
     provenance.stamp(fig, reports=[report] if has else [], data_files=[] if has else [fpath])
-    provenance.savefig(fig, png, dpi=110, bbox_inches="tight", pad_inches=0.1)
+    # written beside it under a unique name and renamed (coloc's rule for the files it writes:
+    # never through a symbolic link, never over anything but a regular file)
+    fd, tmp = tempfile.mkstemp(prefix=os.path.basename(png) + ".", suffix=".tmp.png",
+                               dir=os.path.dirname(os.path.abspath(png)))
+    os.close(fd)
+    try:
+        provenance.savefig(fig, tmp, dpi=110, bbox_inches="tight", pad_inches=0.1)
+        why = png_target_problem(png)
+        if why:
+            raise OSError(why)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, png)
+    except BaseException:
+        os.unlink(tmp)
+        raise
     print("snapshot.py: wrote %s%s" % (png, " (cropped at %s = %.4g m of %.4g m)" % (
         names[up], top, ext[3]) if top < ext[3] else ""))
     return 0

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -101,8 +102,10 @@ void applyOverride(Json& doc, const std::string& assignment) {
     if (node->is_array()) {
       if (!std::all_of(p.begin(), p.end(), ::isdigit))
         throw ConfigError(path, "segment '" + p + "' must index a list");
-      const auto idx = std::stoul(p);
-      if (idx >= node->size())
+      // (an index of any length: one that does not fit in 64 bits is out of range too)
+      unsigned long long idx = 0;
+      const auto [end, ec] = std::from_chars(p.data(), p.data() + p.size(), idx);
+      if (ec != std::errc() || end != p.data() + p.size() || idx >= node->size())
         throw ConfigError(path,
                           fmt::format("list index {} is out of range (size {})", p, node->size()));
       node = &(*node)[idx];

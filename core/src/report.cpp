@@ -1,9 +1,12 @@
 #include "coloc/core/report.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+
+#include "coloc/core/files.hpp"
 
 namespace coloc {
 
@@ -62,24 +65,19 @@ std::string Report::write(const Comm& comm, const std::string& dir) const {
     // checked (the last buffer is written there).
     try {
       makeDirectories(dir);
-      std::ofstream out(tmp, std::ios::trunc);
-      if (!out) throw IoError("cannot write '" + tmp + "': " + std::strerror(errno));
-      errno = 0;
-      out << json_.dump(2) << "\n";
-      out.close();
-      if (!out)
-        throw IoError("error writing '" + tmp + "'" +
-                      (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
+      // a regular file only, never through a symbolic link (coloc/core/files.hpp)
+      if (const std::string why = writeTargetProblem(path); !why.empty()) throw IoError(why);
+      const std::string text = json_.dump(2) + "\n";
+      const int fd = createFresh(tmp);
+      int e = writeAll(fd, text);
+      if (::close(fd) != 0 && e == 0) e = errno;
+      if (e != 0) throw IoError("error writing '" + tmp + "': " + std::strerror(e));
     } catch (const std::exception& e) {
       err = e.what();
     }
   }
   std::string msg = comm.firstError(err, 4);
-  if (msg.empty() && comm.isRoot()) {
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) err = "cannot rename '" + tmp + "' to '" + path + "': " + ec.message();
-  }
+  if (msg.empty() && comm.isRoot()) err = publishFile(tmp, path);
   if (msg.empty()) msg = comm.firstError(err, 4);
   if (!msg.empty()) {
     if (comm.isRoot()) {

@@ -27,24 +27,24 @@ void declareRunConfig(Schema& s) {
            "seconds of rank 0's wall clock between progress rows (run.progress_columns); the "
            "first and the last step always get one (0: no progress table)",
            Range::nonNegative());
-  s.nameList("run.progress_columns",
-             {"step", "time", "dt", "ke", "cfl", "p_iter", "steps_per_s", "left"},
-             "the columns of the progress table (LAMMPS's thermo_style; a list, or names "
-             "separated by commas): step, time (s), dt (s, of the last step), particles "
-             "(global count), ke (translational kinetic energy of the particles, J), contacts "
-             "(particle-particle contacts per particle), cfl (the fluid's CFL number of the "
-             "last step), p_iter (pressure iterations of the last solve), p_iter_avg (per "
-             "solve over the run), dp (rho_f (p_bottom - p_top) between the lowest and the "
-             "highest layer of cells along gravity, Pa), wall_per_step (s, since the last "
-             "row), steps_per_s (over this run), left (estimated wall seconds to the end), "
-             "t_fluid (K, the fluid's mean temperature weighted by eps: fluid.heat), "
-             "t_particles (K, the particles' mass-weighted mean temperature: particles.heat); "
-             "or any number of report.json by its key path with dots (LAMMPS's thermo_style "
-             "custom), e.g. fluid.cfl_last, particles.heat.temperature_max, "
-             "timers.dem_force.max, bed.bed_height_m, fluid.drag_force.2: computed at each row "
-             "(the report's collectives then), refused at the set-up when the run's report has "
-             "no such number; '-' where the run has no such value (docs/output.md)",
-             progressColumnNames(), true);
+  s.nameList(
+      "run.progress_columns", {"step", "time", "dt", "ke", "cfl", "p_iter", "steps_per_s", "left"},
+      "the columns of the progress table (LAMMPS's thermo_style; a list, or names "
+      "separated by commas): step, time (s), dt (s, of the last step), particles "
+      "(global count), ke (translational kinetic energy of the particles, J), contacts "
+      "(particle-particle contacts per particle), cfl (the fluid's CFL number of the "
+      "last step), p_iter (pressure iterations of the last solve), p_iter_avg (per "
+      "solve over the run), dp (rho_f (p_bottom - p_top) between the lowest and the "
+      "highest layer of cells along gravity, Pa), wall_per_step (s, since the last "
+      "row), steps_per_s (over this run), left (estimated wall seconds to the end), "
+      "t_fluid (K, the fluid's mean temperature weighted by eps: fluid.heat), "
+      "t_particles (K, the particles' mass-weighted mean temperature: particles.heat); "
+      "or any number of report.json by its key path with dots (LAMMPS's thermo_style "
+      "custom), e.g. fluid.cfl_last, particles.heat.temperature_max, "
+      "timers.dem_force.max, bed.bed_height_m, fluid.drag_force.2: computed at each row "
+      "(the report's collectives then), refused at the set-up when the run's report has "
+      "no such number; '-' where the run has no such value (docs/output.md); each at most once",
+      progressColumnNames(), /*dottedNames=*/true, /*unique=*/true);
   s.boolean("run.timer_sync", false,
             "timed barriers before the fluid's halo after the momentum predictor and before "
             "the DEM's rebuild vote in every sub-step: a rank's wait for the slowest one is "

@@ -173,6 +173,16 @@ Schema& Schema::number(const std::string& path, std::optional<double> def, const
   return *this;
 }
 
+Schema& Schema::optionalNumber(const std::string& path, const std::string& help, Range r) {
+  KeySpec s;
+  s.kind = KeyKind::Number;
+  s.optional = true;
+  s.range = r;
+  s.help = help;
+  insert(path, std::move(s));
+  return *this;
+}
+
 Schema& Schema::integer(const std::string& path, std::optional<long long> def,
                         const std::string& help, Range r) {
   KeySpec s;
@@ -239,9 +249,10 @@ Schema& Schema::numberList(const std::string& path, std::optional<std::vector<do
 
 Schema& Schema::nameList(const std::string& path, std::vector<std::string> def,
                          const std::string& help, std::vector<std::string> choices,
-                         bool dottedNames) {
+                         bool dottedNames, bool unique) {
   KeySpec s;
   s.kind = KeyKind::NameList;
+  s.unique = unique;
   s.defaultValue = def;
   s.choices = std::move(choices);
   s.dottedNames = dottedNames;
@@ -326,6 +337,7 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
   for (const auto& [key, spec] : keys_) {
     const std::string path = detail::joinKey(prefix, key);
     const bool present = user.contains(key);
+    if (!present && spec.optional) continue;  // not given: absent from the resolved case too
     if (!present && spec.defaultValue.is_null() && !(spec.kind == KeyKind::Object && spec.object))
       throw ConfigError(path, "required key is missing");
     const Json& v = present ? user.at(key) : spec.defaultValue;
@@ -409,12 +421,18 @@ Json Schema::resolve(const Json& user, const std::string& prefix) const {
         std::string allowed;
         for (auto& c : spec.choices) allowed += (allowed.empty() ? "" : ", ") + c;
         if (names.empty()) throw ConfigError(path, "no names given, expected some of: " + allowed);
-        for (const auto& n : names)
+        for (std::size_t i = 0; i < names.size(); ++i) {
+          const auto& n = names[i];
           if (!spec.choices.empty() &&
               std::find(spec.choices.begin(), spec.choices.end(), n) == spec.choices.end() &&
               !(spec.dottedNames && n.find('.') != std::string::npos))
             throw ConfigError(path, "unknown name '" + n + "', expected some of: " + allowed +
                                         (spec.dottedNames ? ", or a key path with a dot" : ""));
+          if (spec.unique &&
+              std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(i), n) !=
+                  names.begin() + static_cast<std::ptrdiff_t>(i))
+            throw ConfigError(path, "'" + n + "' is given twice");
+        }
         out[key] = names;
         break;
       }
@@ -447,7 +465,9 @@ std::string Schema::describe(const std::string& prefix) const {
       continue;
     }
     os << "  " << path << "  (" << kindName(spec.kind);
-    if (!spec.defaultValue.is_null())
+    if (spec.optional)
+      os << ", optional";
+    else if (!spec.defaultValue.is_null())
       os << ", default " << spec.defaultValue.dump();
     else
       os << ", required";

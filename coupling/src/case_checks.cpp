@@ -268,6 +268,31 @@ void checkFileKeys(const Config& cfg) {
     throw ConfigError("output.checkpoint_interval", why);
 }
 
+/// Heat keys a run of this mode (or with heat off) does not use: said, never silently ignored.
+void checkHeatKeys(const Config& cfg, std::vector<std::string>& notes) {
+  const RunMode mode = runMode(cfg);
+  const char* const modeName = runModeName(mode);
+  if (mode == RunMode::ParticlesOnly && cfg.boolean("fluid.heat"))
+    notes.push_back(fmt::format("run.mode = {}: fluid.heat is not used (no fluid)", modeName));
+  if (mode == RunMode::FluidOnly && cfg.boolean("particles.heat"))
+    notes.push_back(
+        fmt::format("run.mode = {}: particles.heat is not used (no particles)", modeName));
+  if ((mode == RunMode::FluidOnly || mode == RunMode::ParticlesOnly) &&
+      cfg.string("coupling.heat_transfer") != "none")
+    notes.push_back(fmt::format(
+        "run.mode = {}: coupling.heat_transfer = {} is not used (no fluid-particle exchange)",
+        modeName, cfg.string("coupling.heat_transfer")));
+  if (!cfg.boolean("fluid.heat")) {
+    std::string unused;
+    for (const char* key :
+         {"fluid.conductivity", "fluid.heat_capacity", "fluid.initial_temperature"})
+      if (cfg.has(key)) unused += (unused.empty() ? "" : ", ") + std::string(key);
+    if (!unused.empty()) notes.push_back("fluid.heat = false: " + unused + " not used");
+  }
+  if (!cfg.boolean("particles.heat") && cfg.has("particles.wall_temperature"))
+    notes.push_back("particles.heat = false: particles.wall_temperature not used");
+}
+
 std::vector<std::string> checkCase(const Config& cfg) {
   std::vector<std::string> notes;
   checkName(cfg);
@@ -279,6 +304,7 @@ std::vector<std::string> checkCase(const Config& cfg) {
   checkTimeSteps(cfg, notes);
   checkBoundaries(cfg, notes);
   checkInflow(cfg);
+  checkHeatKeys(cfg, notes);
   const std::string mode = cfg.string("run.mode");
   if (mode == "coupled" || mode == "dummy_dem") selfVelocityFromConfig(cfg);
   if (cfg.integer("run.steps") > 0 && cfg.number("run.end_time") > 0)

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <type_traits>
 #include <utility>
 
@@ -87,7 +88,49 @@ void writeCuts(H5File& file, const std::string& group, const Decomposition& dec)
                       std::span<const double>(asDoubles(dec.cuts()[d])));
 }
 
-CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
+namespace {
+
+/// A damaged checkpoint (exit status 2, like a damaged dataset): the attribute and what it holds.
+[[noreturn]] void damaged(const std::string& what) {
+  throw Error("damaged: " + what);
+}
+
+/// The attributes of the root and /grid hold what a checkpoint can hold; the config attribute is
+/// the JSON object of a case (at most kMaxJsonDepth levels deep: parsed with that bound).
+void validateInfo(const CheckpointInfo& info) {
+  if (info.steps < 0)
+    damaged(fmt::format("attribute step = {} (a step count is >= 0)", info.steps));
+  if (!std::isfinite(info.time) || info.time < 0)
+    damaged(fmt::format("attribute time = {:g} (a time is finite and >= 0)", info.time));
+  if (info.ranks < 1 || info.ranks > (1 << 24))
+    damaged(fmt::format("attribute ranks = {} (1 .. {})", info.ranks, 1 << 24));
+  for (int d = 0; d < 3; ++d) {
+    if (!std::isfinite(info.grid.origin[d]) || !std::isfinite(info.grid.length[d]) ||
+        !(info.grid.length[d] > 0))
+      damaged(
+          fmt::format("/grid: attributes origin, length along {} ({:g}, {:g}): a box is "
+                      "finite, of positive length",
+                      kAxis[d], info.grid.origin[d], info.grid.length[d]));
+    if (info.grid.cells[d] < 1)
+      damaged(
+          fmt::format("/grid: attribute cells along {} = {} (>= 1)", kAxis[d], info.grid.cells[d]));
+  }
+  Json config;
+  try {
+    config = Json::parse(info.config, [](int depth, Json::parse_event_t ev, Json&) {
+      using E = Json::parse_event_t;
+      if ((ev == E::object_start || ev == E::array_start) && depth >= kMaxJsonDepth)
+        throw std::length_error("nested deeper than the depth a case has");
+      return true;
+    });
+  } catch (const std::exception& e) {
+    damaged(fmt::format("attribute config is not the JSON of a case ({})", e.what()));
+  }
+  if (!config.is_object()) damaged("attribute config is not the JSON object of a case");
+}
+
+/// The attributes of `path`, read on the ranks of `comm` (collective).
+CheckpointInfo readInfo(const Comm& comm, const std::string& path) {
   CheckpointInfo info;
   info.path = path;
   try {
@@ -119,13 +162,16 @@ CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
     const auto c = f.attributeDoubles("/grid", "cells");
     const auto p = f.attributeDoubles("/grid", "periodic");
     if (o.size() != 3 || l.size() != 3 || c.size() != 3 || p.size() != 3)
-      throw Error("/grid: attributes origin, length, cells, periodic must have 3 entries");
+      damaged("/grid: attributes origin, length, cells, periodic must have 3 entries");
     for (int d = 0; d < 3; ++d) {
       info.grid.origin[d] = o[d];
       info.grid.length[d] = l[d];
-      info.grid.cells[d] = static_cast<int>(std::lround(c[d]));
+      // (a cell count beyond an int is damage: validateInfo says so)
+      info.grid.cells[d] =
+          c[d] >= 1 && c[d] < 2147483647.0 ? static_cast<int>(std::lround(c[d])) : 0;
       info.grid.periodic[d] = p[d] != 0.0;
     }
+    validateInfo(info);
     info.strategy = f.attributeString("/partition", "strategy");
     if (!PartitionStrategy::named(info.strategy)
              .gridLayout()) {  // boxes, not a process grid's cuts
@@ -150,6 +196,26 @@ CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
     throw Error("checkpoint '" + path + "': " + e.what());
   }
   return info;
+}
+
+}  // namespace
+
+CheckpointInfo readCheckpointInfo(const Comm& comm, const std::string& path) {
+  // Rank 0 reads and checks the file alone first (its own communicator: nothing another rank
+  // does can meet its collectives), and every rank learns the verdict before any open on all
+  // ranks: a file that is no checkpoint, or a damaged one, is refused by name, never a hang.
+  std::string err;
+  if (comm.isRoot()) {
+    try {
+      (void)readInfo(Comm(MPI_COMM_SELF), path);
+    } catch (const std::exception& e) {  // (anything: the other ranks wait for the verdict)
+      err = fmt::format("checkpoint '{}': {}", path, e.what());
+      if (dynamic_cast<const Error*>(&e)) err = e.what();
+    }
+  }
+  err = comm.broadcast(err);
+  if (!err.empty()) throw Error(err);
+  return readInfo(comm, path);
 }
 
 CheckpointInfo checkRestartable(const Comm& comm, const std::string& path, const GlobalGrid& g,
@@ -207,6 +273,16 @@ void readCounter(H5File& file, const std::string& group, const char* name, T& v)
   }
 }
 
+/// A step count and a time (or step) of a counter table: what a run can have written, else
+/// damage (exit status 2) naming the group.
+void checkCounters(const H5File& file, const std::string& group, double time, long long steps) {
+  if (!std::isfinite(time) || time < 0 || steps < 0)
+    throw Error(
+        fmt::format("checkpoint '{}' is damaged: {}: a time of {:g} s or a count of {} "
+                    "(times are finite and >= 0, counts >= 0)",
+                    file.path(), group, time, steps));
+}
+
 /// Which counters a checkpoint holds: every one; one that older files lack (read as the default
 /// when absent); one of fluid.heat (written and read only with it).
 enum class Held { Always, Since, Heat };
@@ -225,6 +301,7 @@ void forEachRunCounter(C& c, Fn&& fn) {
   fn("particle_drag_impulse", c.particleImpulse, Held::Always);
   fn("fluid_drag_impulse", c.fluidImpulse, Held::Always);
   fn("heat_exchange_residual", c.heatResidual, Held::Since);
+  fn("heat_exchanged", c.heatExchanged, Held::Since);
 }
 
 /// The fluid's counters (fv::FluidCounters), one attribute each, in one order:
@@ -279,6 +356,9 @@ RunCounters readRunCounters(H5File& file, const std::string& group) {
     } catch (const Error&) {
     }
   });
+  checkCounters(file, group, c.time, c.steps);
+  checkCounters(file, group, c.lastDt, c.substeps);
+  checkCounters(file, group, c.lastStepDt, c.steps);
   return c;
 }
 
@@ -305,6 +385,13 @@ void writeFluidState(H5File& file, const std::string& group, const Decomposition
 
 void readFluidState(H5File& file, const std::string& group, const Decomposition& dec,
                     fv::FluidSolver& fluid) {
+  if (fluid.hasHeat() && !file.exists(group + "/T"))
+    throw ConfigError("fluid.heat",
+                      "true, but the checkpoint '" + file.path() +
+                          "' holds no fluid temperature (" + group +
+                          "/T: it was written with fluid.heat = false): a restart cannot "
+                          "turn the fluid's heat on; start from the case, or restart with "
+                          "fluid.heat = false");
   // the table's non-const walk marks the solver's ghosts and rates stale; restoreState sets them
   std::string err;  // a restart must not start from NaN or from an impossible fluid fraction
   bool lacksOptional = false;
@@ -341,6 +428,18 @@ void readFluidState(H5File& file, const std::string& group, const Decomposition&
   });
   // The optional arrays are the pressure set-up's operator: without them the next step sets up.
   if (lacksOptional) c.setupDt = -1;
+  if (!std::isfinite(c.setupDt) || !std::isfinite(c.matrixDt) || c.setupReuses < 0 ||
+      c.setupIterations < -1)
+    throw Error(fmt::format(
+        "checkpoint '{}' is damaged: {}: the pressure set-up's counters (pressure_setup_dt {:g}, "
+        "pressure_matrix_dt {:g}, pressure_setup_reuses {}, pressure_setup_iterations {})",
+        file.path(), group, c.setupDt, c.matrixDt, c.setupReuses, c.setupIterations));
+  checkCounters(file, group, c.time, c.steps);
+  checkCounters(file, group, c.dtOld, c.solves);
+  checkCounters(file, group, c.dtLast, c.itSum);
+  for (const double h : {c.heatEnthalpy0, c.heatSource, c.heatFace[0], c.heatFace[1], c.heatFace[2],
+                         c.heatFace[3], c.heatFace[4], c.heatFace[5]})
+    if (!std::isfinite(h)) checkCounters(file, group + " (heat accounts)", h, 0);
   fluid.restoreState(c);
 }
 
@@ -463,18 +562,40 @@ void writeDemState(H5File& file, const std::string& group, const dem::DemState& 
 dem::DemState readDemState(H5File& file, const std::string& group) {
   dem::DemState s;
   const Comm& comm = file.comm();
-  const long long total = file.attributeInt(group, "count");
+  // The counts as the datasets hold them, checked before anything is sized by them: a damaged
+  // count is damage (exit status 2), not an allocation of its size.
+  const auto rowsHeld = [&](const std::string& dataset, const char* countName) {
+    const long long count = file.attributeInt(dataset.substr(0, dataset.rfind('/')), countName);
+    const auto shape = file.shape(dataset);
+    if (shape.empty() || count < 0 || count != shape[0])
+      throw Error(
+          fmt::format("checkpoint '{}' is damaged: {}: attribute {} = {}, but {} holds {} "
+                      "rows",
+                      file.path(), dataset.substr(0, dataset.rfind('/')), countName, count, dataset,
+                      shape.empty() ? 0 : shape[0]));
+    return count;
+  };
+  const long long total = rowsHeld(group + "/id", "count");
   const RowRange r = evenRows(comm, total);
   auto& p = s.particles;
   p.nOwned = static_cast<std::size_t>(r.count);
   p.nGhost = 0;
   if (file.exists(group + "/extra")) {  // "name components ops;" per extra field
-    std::istringstream in(file.attributeString(group + "/extra", "fields"));
+    const std::string fields = file.attributeString(group + "/extra", "fields");
+    std::istringstream in(fields);
     std::string name;
     int comps = 0;
     unsigned ops = 0;
     char sep = 0;
-    while (in >> name >> comps >> ops >> sep) p.addField(name, comps, ops);
+    while (in >> name >> comps >> ops >> sep) {
+      try {
+        if (ops > 0xff) throw Error(fmt::format("unknown operations {}", ops));
+        p.addField(name, comps, ops);
+      } catch (const Error& e) {
+        throw Error(fmt::format("checkpoint '{}' is damaged: {}/extra: attribute fields: {}",
+                                file.path(), group, e.what()));
+      }
+    }
   }
   dem::forEachField(p, [&]<class T>(const dem::FieldInfo& fi, std::vector<T>* c) {
     if (!(fi.ops & dem::kOpState)) return;
@@ -494,10 +615,12 @@ dem::DemState readDemState(H5File& file, const std::string& group) {
   s.time = file.attributeDouble(group, "time");
   s.steps = file.attributeInt(group, "steps");
   s.rebuilds = file.attributeInt(group, "rebuilds");
+  checkCounters(file, group, s.time, s.steps);
+  checkCounters(file, group, 0.0, s.rebuilds);
   s.flow = dem::DemFlow::unpack(file.attributeDoubles(group, "flow"));
   s.heat = readDemHeat(file, group);
   const std::string cg = group + "/contacts";
-  const RowRange rc = evenRows(comm, file.attributeInt(cg, "count"));
+  const RowRange rc = evenRows(comm, rowsHeld(cg + "/holder", "count"));
   const auto holder = readParticleArray<std::int64_t>(file, cg + "/holder", rc);
   const auto partner = readParticleArray<std::int64_t>(file, cg + "/partner", rc);
   const auto shear = readRows3(file, cg + "/shear", rc);
@@ -524,10 +647,7 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
       bad("mass", i, "has mass " + g9(p.mass[i]) + " (must be positive and finite)");
     if (!(std::isfinite(p.radius[i]) && p.radius[i] > 0))
       bad("radius", i, "has radius " + g9(p.radius[i]) + " (must be positive and finite)");
-    if (p.material[i] < 0 || static_cast<std::size_t>(p.material[i]) >= materials)
-      bad("material", i,
-          fmt::format("has material {}, the case has {} (particles.materials)", p.material[i],
-                      materials));
+    if (p.material[i] < 0) bad("material", i, fmt::format("has material {}", p.material[i]));
     if (err.empty() && p.radius[i] > 0 && p.mass[i] > 0) {
       const double rho = p.mass[i] / (4.0 / 3.0 * M_PI * p.radius[i] * p.radius[i] * p.radius[i]);
       if (!std::isfinite(rho)) bad("mass", i, "has a density that is not finite");
@@ -558,6 +678,19 @@ void validateDemState(const Comm& comm, const dem::DemState& s, const GlobalGrid
             "{}: the energy accounts (heat, heat_shares) hold a value that is not "
             "finite",
             group);
+  }
+  // The materials the particles use must be the case's: fewer declared is the case's error (the
+  // particles keep their materials), named by its key.
+  {
+    long long top = -1;
+    for (std::size_t i = 0; i < n; ++i) top = std::max<long long>(top, p.material[i]);
+    top = comm.max(top);
+    if (top >= static_cast<long long>(materials))
+      throw ConfigError("particles.materials",
+                        fmt::format("the checkpoint's particles use material {}, the case declares "
+                                    "{} material(s): a restart keeps the particles and their "
+                                    "materials; declare them all",
+                                    top, materials));
   }
   // Ids unique over all ranks, and every contact history held by (and pointing at) an existing
   // particle: every rank gathers the sorted ids (8 bytes a particle, once at a restart).

@@ -28,14 +28,17 @@ ParticleCoupling::ParticleCoupling(const Config& cfg, const Decomposition& dec, 
       nu_(cfg.number("fluid.nu")),
       heatLaw_(heatLawFromConfig(cfg)) {
   if (!convects()) return;
-  kF_ = cfg.number("fluid.conductivity");
-  prandtl3_ = std::cbrt(rhoF_ * nu_ * cfg.number("fluid.heat_capacity") / kF_);
+  // (the case checks made fluid.heat and particles.heat required with convection, and with them
+  // these optional keys)
+  kF_ = cfg.optionalNumber("fluid.conductivity").value_or(0.0);
   if (!(kF_ > 0))
     throw ConfigError("fluid.conductivity",
                       "convection (coupling.heat_transfer) needs a fluid conductivity > 0");
+  prandtl3_ =
+      std::cbrt(rhoF_ * nu_ * cfg.optionalNumber("fluid.heat_capacity").value_or(0.0) / kF_);
   for (const auto& m : cfg.at("particles.materials")) {
-    cpOfMaterial_.push_back(m["heat_capacity"].get<double>());
-    kOfMaterial_.push_back(m["conductivity"].get<double>());
+    cpOfMaterial_.push_back(m.value("heat_capacity", 0.0));
+    kOfMaterial_.push_back(m.value("conductivity", 0.0));
   }
 }
 
@@ -306,7 +309,7 @@ void ParticleCoupling::applyForces(const std::array<double*, 3>& out, double dt,
   }
 }
 
-void ParticleCoupling::applyHeat(double* out, double dt, double sums[2]) const {
+void ParticleCoupling::applyHeat(double* out, double dt, double sums[3]) const {
   const std::size_t n = stencils_.count();
   const double* Tp = view_.temperature;
   for (std::size_t i = 0; i < n; ++i) {
@@ -314,6 +317,7 @@ void ParticleCoupling::applyHeat(double* out, double dt, double sums[2]) const {
     out[i] = q;
     sums[0] += q * dt;
     sums[1] += hEff_[i] * (std::abs(TAt_[i]) + std::abs(Tp[i])) * dt;
+    sums[2] += std::abs(q) * dt;
   }
 }
 

@@ -91,8 +91,9 @@ class ParticleCoupling {
   void applyForces(const std::array<double*, 3>& out, double dt, double sums[9]) const;
   /// Convection: the heat rate q = H' (Tmean - T_p) of each particle into out[i] (W); adds to
   /// sums[0] the heat the particles receive over dt and to sums[1] the gross sum H' (|Tmean| +
-  /// |T_p|) dt (the scale of the round-off of the two sides' sums).
-  void applyHeat(double* out, double dt, double sums[2]) const;
+  /// |T_p|) dt (the scale of the round-off of the two sides' sums), and to sums[2] the heat
+  /// exchanged, sum |q| dt.
+  void applyHeat(double* out, double dt, double sums[3]) const;
 
  private:
   /// beta' = beta / responseDenominator(): the implicit response over dt of a particle of mass m.

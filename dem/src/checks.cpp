@@ -27,14 +27,15 @@ std::vector<Material> readMaterials(const Config& cfg) {
     mt.restitution = m["restitution"].get<double>();
     mt.friction = m["friction"].get<double>();
     mt.rollingFriction = m["rolling_friction"].get<double>();
-    mt.heatCapacity = m["heat_capacity"].get<double>();
-    mt.conductivity = m["conductivity"].get<double>();
+    // optional keys: absent (0 here) unless given; required with particles.heat
+    mt.heatCapacity = m.value("heat_capacity", 0.0);
+    mt.conductivity = m.value("conductivity", 0.0);
     if (cfg.boolean("particles.heat")) {
       const std::string key = fmt::format("particles.materials[{}]", mats.size());
-      if (!(mt.heatCapacity > 0))
+      if (!m.contains("heat_capacity"))
         throw ConfigError(key + ".heat_capacity",
                           "required (> 0, J/(kg K)) when particles.heat is true");
-      if (!(mt.conductivity > 0))
+      if (!m.contains("conductivity"))
         throw ConfigError(key + ".conductivity",
                           "required (> 0, W/(m K)) when particles.heat is true");
     }

@@ -6,6 +6,10 @@
 namespace coloc::dem {
 
 namespace {
+/// A temperature (K): above absolute zero, and below what the enthalpy sums hold with round-off
+/// to spare (1e6 K: hotter than any material stays solid).
+const Range kTemperatureRange = Range::openClosed(0.0, 1e6);
+
 Schema commonSource() {
   Schema s;
   s.integer("material", 0, "index into particles.materials", Range::nonNegative());
@@ -16,7 +20,7 @@ Schema commonSource() {
            Range::nonNegative());
   s.number("temperature", 293.15,
            "initial temperature of the source's particles (K); used when particles.heat is true",
-           Range::positive());
+           kTemperatureRange);
   return s;
 }
 
@@ -91,13 +95,15 @@ void declareConfig(Schema& s) {
     m.number("rolling_friction", 0.0,
              "rolling resistance coefficient (constant directional torque); 0: off",
              Range::nonNegative());
-    m.number("heat_capacity", 0.0,
-             "specific heat capacity c_p (J/(kg K)); required (> 0) when particles.heat is true",
-             Range::nonNegative());
-    m.number("conductivity", 0.0,
-             "thermal conductivity k (W/(m K)) for contact conduction; required (> 0) when "
-             "particles.heat is true",
-             Range::nonNegative());
+    // Optional (no default, no sentinel): required when particles.heat is true. Bounded far
+    // above any real material, so that no value makes the enthalpies or conductances overflow.
+    m.optionalNumber("heat_capacity",
+                     "specific heat capacity c_p (J/(kg K)); required when particles.heat is true",
+                     Range::openClosed(0.0, 1e8));
+    m.optionalNumber("conductivity",
+                     "thermal conductivity k (W/(m K)) for contact conduction and the Biot "
+                     "number; required when particles.heat is true",
+                     Range::openClosed(0.0, 1e6));
     s.list("particles.materials", {{"", m}},
            "materials: [{density, young, poisson, restitution, friction, rolling_friction}]");
   }
@@ -108,10 +114,12 @@ void declareConfig(Schema& s) {
   s.boolean("particles.contact_conduction", true,
             "with particles.heat: heat conducted through particle-particle and particle-wall "
             "contacts (Batchelor & O'Brien: H = 2 k_eff a, a the Hertz contact radius)");
-  s.number("particles.wall_temperature", 0.0,
-           "with particles.heat: temperature of every wall (K), which conducts through its "
-           "contacts with the wall_material's conductivity; 0: adiabatic walls",
-           Range::nonNegative());
+  // (above 0 K: a 0 once meant "adiabatic"; such a case file is refused rather than read as a
+  // wall at absolute zero)
+  s.optionalNumber("particles.wall_temperature",
+                   "with particles.heat: temperature of every wall (K), which conducts through its "
+                   "contacts with the wall_material's conductivity; absent: adiabatic walls",
+                   kTemperatureRange);
   s.integer("particles.wall_material", 0, "material of the box walls", Range::nonNegative());
   s.boolean("particles.walls", true,
             "planar walls on every non-periodic face of the box whose particles.boundary is auto");

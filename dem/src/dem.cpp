@@ -204,6 +204,9 @@ double DemSolver::dt() const {
 double DemSolver::time() const {
   return impl_->time;
 }
+void DemSolver::holdExternalHeat(long long substeps) {
+  impl_->heat.heldSubsteps = std::max(0LL, substeps);
+}
 void DemSolver::setFrozen(bool frozen) {
   impl_->frozen = frozen;
 }
@@ -324,7 +327,7 @@ Json DemSolver::diagnostics() const {
     hj["energy_balance"] = scale > 0 ? res / scale : 0.0;
     hj["temperature_min"] = m.comm.min(tMin);
     hj["temperature_max"] = m.comm.max(tMax);
-    hj["wall_temperature"] = h.wallT;
+    hj["wall_temperature"] = h.wallT > 0 ? Json(h.wallT) : Json(nullptr);  // null: adiabatic
     j["heat"] = hj;
   }
   return j;

@@ -51,7 +51,7 @@ void DemSolver::Impl::removeOutflow() {
     if (beyondOutflow(i, &fc)) {
       ++flow.countOut;
       flow.massOut += p.mass[i];
-      if (heat.on) heat.outflowEnthalpy += heat.enthalpy(p, i);
+      if (heat.on) heat.leave(p, i, integrator.dt);
       ++flow.countOutByFace[static_cast<std::size_t>(fc)];
       continue;
     }

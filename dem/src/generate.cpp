@@ -36,19 +36,36 @@ struct SiteGrid {
   long long total() const { return n[0] * n[1] * n[2]; }
 };
 
+/// The most sites a random or layered source's region may hold (the Feistel permutation's
+/// domain, rng.hpp, and what a long long counts with room to spare).
+constexpr double kMaxSites = 0x1p62;
+
 SiteGrid siteGrid(const Json& src, double edge, const std::string& key) {
   SiteGrid g;
   g.lo = vec(src["lo"]);
   const auto hi = vec(src["hi"]);
   g.s = edge;
+  if (!(edge > 0) || !std::isfinite(edge))
+    throw ConfigError(key, fmt::format("the particle site (2 r_max (1 + gap) = {:.6g} m) is not a "
+                                       "positive finite length: check radius, size and gap",
+                                       edge));
+  double total = 1;
   for (int d = 0; d < 3; ++d) {
     const double len = hi[d] - g.lo[d];
     if (!(len > 0)) throw ConfigError(key + ".hi", "must be above lo along every axis");
-    g.n[d] = static_cast<long long>(std::floor(len / edge * (1 + 1e-12)));
-    if (g.n[d] < 1)
+    // counted in double first: a tiny radius in a large region must not overflow the count
+    const double n = std::floor(len / edge * (1 + 1e-12));
+    if (n < 1)
       throw ConfigError(
-          key,
-          fmt::format("the region is thinner than one particle site ({:f} m) along an axis", edge));
+          key, fmt::format("the region is thinner than one particle site ({:.6g} m) along an axis",
+                           edge));
+    total *= n;
+    if (!(total <= kMaxSites))
+      throw ConfigError(key, fmt::format("the region holds more than {:.3g} particle sites of "
+                                         "{:.6g} m (the radius is tiny for the region): make the "
+                                         "region smaller or the particles larger",
+                                         kMaxSites, edge));
+    g.n[d] = static_cast<long long>(n);
   }
   return g;
 }
@@ -73,8 +90,10 @@ void applySpread(NewParticle& p, const Velocity& vel, std::uint64_t seed) {
 /// Site-index range along d that may hold particles of [blockLo, blockHi].
 void siteRange(double lo, double s, long long n, double bLo, double bHi, long long& a,
                long long& b) {
-  a = std::max(0LL, static_cast<long long>(std::floor((bLo - lo) / s)) - 1);
-  b = std::min(n - 1, static_cast<long long>(std::floor((bHi - lo) / s)) + 1);
+  // clamped in double before the cast (a block far from a region of tiny sites)
+  const double top = static_cast<double>(n - 1);
+  a = static_cast<long long>(std::clamp(std::floor((bLo - lo) / s) - 1, 0.0, top + 1));
+  b = static_cast<long long>(std::clamp(std::floor((bHi - lo) / s) + 1, -1.0, top));
 }
 
 double normalCdf(double x) {
@@ -241,11 +260,25 @@ std::vector<InflowInfo> inspectInflow(const Config& cfg, const GlobalGrid& grid,
                                               " must satisfy box low <= min < max <= box high");
     }
     f.s = 2 * f.size.rmax() * (1 + src["gap"].get<double>());
-    f.na = static_cast<long long>(std::floor((f.pmax[0] - f.pmin[0]) / f.s * (1 + 1e-12)));
-    f.nb = static_cast<long long>(std::floor((f.pmax[1] - f.pmin[1]) / f.s * (1 + 1e-12)));
-    if (f.na < 1 || f.nb < 1)
+    if (!(f.s > 0) || !std::isfinite(f.s))
+      throw ConfigError(key + ".gap",
+                        fmt::format("the insertion site (2 r_max (1 + gap) = {:.6g} m) is not a "
+                                    "positive finite length",
+                                    f.s));
+    // counted in double first: a tiny radius on a large patch must not overflow the count
+    const double na = std::floor((f.pmax[0] - f.pmin[0]) / f.s * (1 + 1e-12));
+    const double nb = std::floor((f.pmax[1] - f.pmin[1]) / f.s * (1 + 1e-12));
+    if (na < 1 || nb < 1)
+      throw ConfigError(
+          key + ".patch",
+          fmt::format("the patch is narrower than one insertion site ({:.6g} m)", f.s));
+    if (!(na * nb <= kMaxSites))
       throw ConfigError(key + ".patch",
-                        fmt::format("the patch is narrower than one insertion site ({:f} m)", f.s));
+                        fmt::format("the patch holds more than {:.3g} insertion sites of {:.6g} m "
+                                    "(the radius is tiny for the patch)",
+                                    kMaxSites, f.s));
+    f.na = static_cast<long long>(na);
+    f.nb = static_cast<long long>(nb);
     if (f.s > grid.length[f.axis])
       throw ConfigError(key + ".face", "the box is thinner than one insertion site");
     out.push_back(f);
@@ -296,12 +329,17 @@ std::vector<SourceInfo> inspectSources(const Config& cfg, const GlobalGrid& grid
       const auto lo = vec(src["lo"]);
       const auto sp = vec(src["spacing"]);
       std::array<double, 3> last{};
-      info.count = 1;
+      double count = 1;  // in double first: three 32-bit counts overflow a long long
       for (int d = 0; d < 3; ++d) {
         const long long c = src["counts"][d].get<long long>();
-        info.count *= c;
+        count *= static_cast<double>(c);
         last[d] = lo[d] + static_cast<double>(c - 1) * sp[d];
       }
+      if (!(count <= kMaxSites))
+        throw ConfigError(key + ".counts",
+                          fmt::format("{:.4g} particles: more than a run can hold", count));
+      info.count = 1;  // exact now: at most about 2^62, far from a long long's end
+      for (int d = 0; d < 3; ++d) info.count *= src["counts"][d].get<long long>();
       const auto sd = sizeDistribution(src, key);
       info.rmax = sd.rmax();
       info.rmin = sd.rmin();
@@ -411,36 +449,64 @@ void generate(const Config& cfg, const std::vector<SourceInfo>& info, const Real
       if (!random) ax = src["axis"].get<std::string>()[0] - 'x';
       int o1 = ax == 0 ? 1 : 0, o2 = ax == 2 ? 1 : 2;
       std::array<long long, 3> a{}, b{};
-      for (int d = 0; d < 3; ++d)
+      double blockSites = 1;
+      for (int d = 0; d < 3; ++d) {
         siteRange(sg.lo[d], sg.s, sg.n[d], blockLo[d], blockHi[d], a[d], b[d]);
-      for (long long kz = a[2]; kz <= b[2]; ++kz)
-        for (long long ky = a[1]; ky <= b[1]; ++ky)
-          for (long long kx = a[0]; kx <= b[0]; ++kx) {
-            const long long k3[3] = {kx, ky, kz};
-            long long k;
-            if (random) {
-              const long long site = kx + sg.n[0] * (ky + sg.n[1] * kz);
-              k = static_cast<long long>(perm.inverse(static_cast<std::uint64_t>(site)));
-            } else {
-              k = k3[o1] + sg.n[o1] * (k3[o2] + sg.n[o2] * k3[ax]);
+        blockSites *= static_cast<double>(std::max(0LL, b[d] - a[d] + 1));
+      }
+      // Particle k on site `site` (k3 its indices): made when k < count and the site is near
+      // the block. The same particles either way; the loop is over the fewer of the block's
+      // sites and the source's particles, so that the work is bounded by what is produced (a
+      // tiny radius gives a huge number of sites, a dense fill as many particles as sites).
+      const auto make = [&](long long k, const long long k3[3]) {
+        NewParticle p;
+        p.id = base + k;
+        p.material = mat;
+        const auto uid = static_cast<std::uint64_t>(p.id);
+        if (!sd.fixed())
+          p.radius = sd.radius(uniform01(seed, uid, 1));
+        else
+          p.radius = random && rmax > r0 ? r0 + (rmax - r0) * uniform01(seed, uid, 1) : r0;
+        for (int d = 0; d < 3; ++d) {
+          const double free = std::max(0.0, 0.5 * sg.s - p.radius);
+          p.x[d] = sg.lo[d] + (static_cast<double>(k3[d]) + 0.5) * sg.s +
+                   jitter * free * (2.0 * uniform01(seed, uid, 2 + d) - 1.0);
+        }
+        applySpread(p, velocity, seed);
+        put(p);
+      };
+      if (blockSites <= static_cast<double>(count)) {
+        for (long long kz = a[2]; kz <= b[2]; ++kz)
+          for (long long ky = a[1]; ky <= b[1]; ++ky)
+            for (long long kx = a[0]; kx <= b[0]; ++kx) {
+              const long long k3[3] = {kx, ky, kz};
+              long long k;
+              if (random) {
+                const long long site = kx + sg.n[0] * (ky + sg.n[1] * kz);
+                k = static_cast<long long>(perm.inverse(static_cast<std::uint64_t>(site)));
+              } else {
+                k = k3[o1] + sg.n[o1] * (k3[o2] + sg.n[o2] * k3[ax]);
+              }
+              if (k < count) make(k, k3);
             }
-            if (k >= count) continue;
-            NewParticle p;
-            p.id = base + k;
-            p.material = mat;
-            const auto uid = static_cast<std::uint64_t>(p.id);
-            if (!sd.fixed())
-              p.radius = sd.radius(uniform01(seed, uid, 1));
-            else
-              p.radius = random && rmax > r0 ? r0 + (rmax - r0) * uniform01(seed, uid, 1) : r0;
-            for (int d = 0; d < 3; ++d) {
-              const double free = std::max(0.0, 0.5 * sg.s - p.radius);
-              p.x[d] = sg.lo[d] + (static_cast<double>(k3[d]) + 0.5) * sg.s +
-                       jitter * free * (2.0 * uniform01(seed, uid, 2 + d) - 1.0);
-            }
-            applySpread(p, velocity, seed);
-            put(p);
+      } else {
+        for (long long k = 0; k < count; ++k) {
+          long long k3[3];
+          if (random) {
+            const auto site = static_cast<long long>(perm(static_cast<std::uint64_t>(k)));
+            k3[0] = site % sg.n[0];
+            k3[1] = (site / sg.n[0]) % sg.n[1];
+            k3[2] = site / sg.n[0] / sg.n[1];
+          } else {
+            k3[o1] = k % sg.n[o1];
+            k3[o2] = (k / sg.n[o1]) % sg.n[o2];
+            k3[ax] = k / sg.n[o1] / sg.n[o2];
           }
+          bool near = true;
+          for (int d = 0; d < 3; ++d) near = near && k3[d] >= a[d] && k3[d] <= b[d];
+          if (near) make(k, k3);
+        }
+      }
     }
     base += info[i].count;
   }

@@ -16,7 +16,7 @@ void HeatTransfer::setup(const Config& cfg, const std::vector<Material>& mats, P
   on = cfg.boolean("particles.heat");
   if (!on) return;
   conduction = cfg.boolean("particles.contact_conduction");
-  wallT = cfg.number("particles.wall_temperature");
+  wallT = cfg.optionalNumber("particles.wall_temperature").value_or(0.0);  // 0: adiabatic
   nMat = static_cast<int>(mats.size());
   cp.clear();
   kPair.assign(static_cast<std::size_t>(nMat * nMat), 0.0);
@@ -111,6 +111,7 @@ void HeatTransfer::integrate(ParticleStore& p, double dt) {
   }
   extHeat += dt * ext;
   wallHeat += dt * wallRate_;
+  if (heldSubsteps > 0) --heldSubsteps;
 }
 
 void HeatTransfer::checkTimeStep(double dt, double overlapLimit, const std::vector<Material>& mats,
@@ -126,14 +127,21 @@ void HeatTransfer::checkTimeStep(double dt, double overlapLimit, const std::vect
     const double hWall = wallT > 0 ? 2.0 * kWall[a] * std::sqrt(r * delta) : 0.0;
     const double H = std::max(hPair, hWall);
     const double limit = kStableFraction * C / H;
-    if (dt > limit)
-      throw ConfigError("particles.dt",
-                        fmt::format("particles.dt = {:.4g} s is above {:.4g} m c_p / H = {:.4g} "
-                                    "s, the explicit limit of the temperature update for the "
-                                    "smallest particle of material {} at the overlap limit (H = "
-                                    "2 k_eff a, a = sqrt(R* delta)): lower particles.dt, or raise "
-                                    "heat_capacity",
-                                    dt, kStableFraction, limit, a));
+    if (!(dt > limit)) continue;
+    // A limit far below any DEM step is a material key out of its range (a conductivity in the
+    // wrong units), not a step to lower: named so.
+    const bool material = !(limit > 1e-4 * dt);
+    const std::string key = material ? fmt::format("particles.materials[{}].conductivity", a)
+                                     : std::string("particles.dt");
+    throw ConfigError(
+        key,
+        fmt::format("particles.dt = {:.4g} s is above {:.4g} s, the explicit limit ({:g} m c_p / "
+                    "H) of the temperature update for the smallest particle of material {} (r = "
+                    "{:.4g} m, heat_capacity {:g} J/(kg K), conductivity {:g} W/(m K)) at the "
+                    "overlap limit (H = 2 k_eff a, a = sqrt(R* delta)): {}",
+                    dt, limit, kStableFraction, a, r, mats[a].heatCapacity, mats[a].conductivity,
+                    material ? "check the conductivity (and heat_capacity) of the material"
+                             : "lower particles.dt, or raise heat_capacity"));
   }
 }
 

@@ -60,6 +60,9 @@ class HeatTransfer {
   // inflowEnthalpy - outflowEnthalpy, summed over the ranks.
   double wallHeat = 0, extHeat = 0, outflowEnthalpy = 0, inflowEnthalpy = 0;
   double enthalpyInitial = 0;
+  /// Sub-steps the external heat rates are still meant for (DemSolver::holdExternalHeat): a
+  /// particle removed meanwhile leaves with q_ext times that many sub-steps' time.
+  long long heldSubsteps = 0;
 
   /// Reads the keys and the materials' heat properties; registers the fields when on.
   void setup(const Config& cfg, const std::vector<Material>& mats, ParticleStore& p);
@@ -77,6 +80,14 @@ class HeatTransfer {
   void setWallRate(double w) { wallRate_ = w; }
   /// T += dt (Q + qExt) / (m c_p) for the owned particles; the accounts advance by dt.
   void integrate(ParticleStore& p, double dt);
+  /// Owned particle i leaves (outflow) in the sub-step now running, before its temperature
+  /// update: the account of what it takes out, with the external heat it was due for the rest
+  /// of the held sub-steps (this one included) counted in, into the particle and out with it.
+  void leave(const ParticleStore& p, std::size_t i, double dt) {
+    const double due = static_cast<double>(heldSubsteps) * dt * p.extra[iExt].data[0][i];
+    extHeat += due;
+    outflowEnthalpy += enthalpy(p, i) + due;
+  }
   /// Enthalpy m c_p T of owned particle i (J).
   double enthalpy(const ParticleStore& p, std::size_t i) const {
     return p.mass[i] * cp[static_cast<std::size_t>(p.material[i])] * p.extra[iT].data[0][i];

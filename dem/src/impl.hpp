@@ -163,6 +163,9 @@ struct DemSolver::Impl {
   // setup.cpp
   void readMaterials(const Config& cfg);
   void setupBins(const Config& cfg, double dmax, long long total);
+  /// The sources placed fewer particles than they hold: ConfigError naming the first such
+  /// source (collective).
+  [[noreturn]] void refuseMissingParticles(const std::vector<detail::SourceInfo>& info);
   void checkTimeStep();
   double massOf(int material, double r) const {
     return mats[static_cast<std::size_t>(material)].density * 4.0 / 3.0 * M_PI * r * r * r;

@@ -108,6 +108,7 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     flow.countInitial = static_cast<long long>(buf[0]);
     flow.massInitial = buf[1];
   }
+  if (flow.countInitial != totals.count) refuseMissingParticles(info);
   if (heat.on) heat.enthalpyInitial = comm.sum(heat.localEnthalpy(p));  // a reduction of its own
   rebuild(true);
   {
@@ -115,6 +116,33 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
     computeForces(false);
   }
   checkOverlap(comm.max(forces.tally().maxOverlap));
+}
+
+void DemSolver::Impl::refuseMissingParticles(const std::vector<detail::SourceInfo>& info) {
+  // Every rank made the particles its bins own: a particle no rank owns (a position that does
+  // not land in the box's bins at double precision, e.g. in a region of 1e16 m) is lost. Which
+  // source lost it, by the ids (source s holds [base_s, base_s + count_s)).
+  std::vector<double> made(info.size(), 0.0);
+  for (std::size_t i = 0; i < p.nOwned; ++i) {
+    long long base = 0;
+    for (std::size_t s = 0; s < info.size(); ++s) {
+      if (p.id[i] < base + info[s].count) {
+        made[s] += 1;
+        break;
+      }
+      base += info[s].count;
+    }
+  }
+  comm.sumInPlace(std::span<double>(made));
+  for (std::size_t s = 0; s < info.size(); ++s)
+    if (static_cast<long long>(made[s]) != info[s].count)
+      throw ConfigError(fmt::format("particles.sources[{}]", s),
+                        fmt::format("placed {} of its {} particles: the others' positions fall "
+                                    "outside every block of the box (a region or box so large "
+                                    "that the particle positions lose their precision?)",
+                                    static_cast<long long>(made[s]), info[s].count));
+  throw Error(fmt::format("placed {} of the sources' {} particles", flow.countInitial,
+                          detail::sourceTotals(info).count));
 }
 
 void DemSolver::Impl::readMaterials(const Config& cfg) {

@@ -34,7 +34,7 @@ FaceBc parseFaceBc(const std::string& key, const Json& j, int d, const GlobalGri
                    bool heat) {
   const std::string type = j.at("type").get<std::string>();
   FaceBc f;
-  if (j.contains("temperature") && j.at("temperature").get<double>() >= 0) {
+  if (j.contains("temperature")) {  // optional: absent, no fixed temperature
     f.fixedTemperature = true;
     f.temperature = j.at("temperature").get<double>();
   }

@@ -1,14 +1,23 @@
 // The "fluid.*" keys of the case file (see docs/fv.md for the meaning of each choice), and their
 // typed values (params.hpp).
+#include <fmt/format.h>
+
+#include <cmath>
+
 #include "coloc/fv/fluid.hpp"
 #include "params.hpp"
 
 namespace coloc::fv {
 
 namespace {
-/// The thermal key of a boundary type (fluid.heat); < 0, the default, means "not given".
+/// A temperature (K): not below absolute zero, and below what any enthalpy sum of a run holds
+/// with round-off to spare (1e6 K: hotter than any material stays solid or liquid).
+const Range kTemperatureRange = Range::between(0.0, 1e6);
+
+/// The thermal key of a boundary type (fluid.heat): optional, absent means "none given" (an
+/// adiabatic wall; an inlet then needs it), never a sentinel value.
 void temperatureKey(Schema& s, const char* help) {
-  s.number("temperature", -1.0, help);
+  s.optionalNumber("temperature", help, kTemperatureRange);
 }
 
 std::map<std::string, Schema> boundaryTypes() {
@@ -30,10 +39,10 @@ std::map<std::string, Schema> boundaryTypes() {
   Schema wall;
   wall.vec3("velocity", std::array<double, 3>{0, 0, 0},
             "tangential wall velocity (m/s), e.g. a moving lid; the normal component must be 0");
-  temperatureKey(wall, "fluid.heat: fixed wall temperature (K); absent (or < 0): adiabatic wall");
+  temperatureKey(wall, "fluid.heat: fixed wall temperature (K); absent: adiabatic wall");
   t["wall"] = wall;
   Schema slip;
-  temperatureKey(slip, "fluid.heat: fixed face temperature (K); absent (or < 0): adiabatic");
+  temperatureKey(slip, "fluid.heat: fixed face temperature (K); absent: adiabatic");
   t["slip"] = slip;
   Schema autoType;
   temperatureKey(autoType,
@@ -41,6 +50,30 @@ std::map<std::string, Schema> boundaryTypes() {
                  "absent: adiabatic");
   t["auto"] = autoType;
   return t;
+}
+}  // namespace
+
+namespace {
+/// fluid.heat: the explicit energy update takes at least dt k_f / (rho_f c_f) sum_d 2 / h_d^2
+/// sub-steps a fluid step for the conduction alone (a cell of fluid, eps = 1); more than the
+/// solver's bound is refused here, naming the conductivity, instead of at the first step.
+void checkHeatSubsteps(const FluidParams& p, const GlobalGrid& grid) {
+  const HeatParams& h = p.heat;
+  double perH2 = 0;
+  for (int d = 0; d < 3; ++d) {
+    const double hd = grid.length[d] / grid.cells[d];
+    perH2 += 2.0 / (hd * hd);
+  }
+  const double alpha = h.conductivity / (h.rho * h.capacity);
+  const double need = std::ceil(p.dtFixed * alpha * perH2);
+  if (!(need <= static_cast<double>(kMaxHeatSubsteps)))
+    throw ConfigError(
+        "fluid.conductivity",
+        fmt::format("{:g} W/(m K) with fluid.heat_capacity = {:g} J/(kg K) and fluid.rho = {:g} "
+                    "kg/m^3 is a thermal diffusivity of {:.3g} m^2/s: the explicit energy update "
+                    "would need {:.3g} sub-steps of fluid.dt = {:g} s on these cells (at most {}); "
+                    "check the conductivity's units, or reduce fluid.dt",
+                    h.conductivity, h.capacity, h.rho, alpha, need, p.dtFixed, kMaxHeatSubsteps));
 }
 }  // namespace
 
@@ -162,12 +195,18 @@ void declareConfig(Schema& s) {
             "solve the fluid energy equation (docs/heat.md): needs fluid.conductivity, "
             "fluid.heat_capacity, fluid.initial_temperature and an inlet temperature per inlet; "
             "off: no temperature at all");
-  s.number("fluid.conductivity", -1.0,
-           "fluid.heat: thermal conductivity k_f (W/(m K)), >= 0; required with fluid.heat");
-  s.number("fluid.heat_capacity", -1.0,
-           "fluid.heat: specific heat capacity c_f (J/(kg K)), > 0; required with fluid.heat");
-  s.number("fluid.initial_temperature", -1.0,
-           "fluid.heat: initial fluid temperature (K), >= 0; required with fluid.heat");
+  // Optional keys (no default, no sentinel): required with fluid.heat.
+  // Bounded far above any real material (diamond conducts ~2e3 W/(m K); hydrogen holds
+  // ~1.4e4 J/(kg K)), so that no value makes the run's numbers overflow.
+  s.optionalNumber("fluid.conductivity",
+                   "fluid.heat: thermal conductivity k_f (W/(m K)); required with fluid.heat",
+                   Range::between(0.0, 1e6));
+  s.optionalNumber("fluid.heat_capacity",
+                   "fluid.heat: specific heat capacity c_f (J/(kg K)); required with fluid.heat",
+                   Range::openClosed(0.0, 1e8));
+  s.optionalNumber("fluid.initial_temperature",
+                   "fluid.heat: initial fluid temperature (K); required with fluid.heat",
+                   kTemperatureRange);
   s.number("fluid.steady_tol", 0.0,
            "steady-state stop: max|u^{n+1}-u^n| / max|u| below this ends a fluid-only run (0: off)",
            Range::nonNegative());
@@ -218,19 +257,23 @@ FluidParams fluidParams(const Config& cfg, const GlobalGrid& grid) {
   auto& h = p.heat;
   h.on = cfg.boolean("fluid.heat");
   h.rho = cfg.number("fluid.rho");
-  h.conductivity = cfg.number("fluid.conductivity");
-  h.capacity = cfg.number("fluid.heat_capacity");
-  h.initial = cfg.number("fluid.initial_temperature");
+  const auto k = cfg.optionalNumber("fluid.conductivity");
+  const auto c = cfg.optionalNumber("fluid.heat_capacity");
+  const auto t0 = cfg.optionalNumber("fluid.initial_temperature");
   if (h.on) {
-    if (!(h.conductivity >= 0))
+    if (!k)
       throw ConfigError("fluid.conductivity",
                         "fluid.heat = true needs the fluid's thermal conductivity (W/(m K), >= 0)");
-    if (!(h.capacity > 0))
+    if (!c)
       throw ConfigError("fluid.heat_capacity",
                         "fluid.heat = true needs the fluid's heat capacity (J/(kg K), > 0)");
-    if (!(h.initial >= 0))
+    if (!t0)
       throw ConfigError("fluid.initial_temperature",
-                        "fluid.heat = true needs the initial fluid temperature (K, >= 0)");
+                        "fluid.heat = true needs the initial fluid temperature (K, > 0)");
+    h.conductivity = *k;
+    h.capacity = *c;
+    h.initial = *t0;
+    checkHeatSubsteps(p, grid);
   }
   return p;
 }

@@ -19,11 +19,6 @@
 
 namespace coloc::fv {
 
-namespace {
-/// The sub-steps' positivity bound: dt_sub <= min(eps^n, eps^{n+1}) V / (sum_f |F_f| + D_f).
-constexpr long long kMaxHeatSubsteps = 100000;
-}  // namespace
-
 double FluidSolver::Impl::heatFluxes(const double* T, int i, int j, int k, double* bnd,
                                      double& rate) const {
   // Heat into owned cell (i, j, k) per rho_f c_f (K m^3/s) through its six faces; the box faces
@@ -134,12 +129,15 @@ void FluidSolver::Impl::heatStep(double dt) {
         }
   }
   ratio = dec.comm().max(ratio);
+  // The sub-steps' positivity bound: dt_sub <= min(eps^n, eps^{n+1}) V / (sum_f |F_f| + D_f).
   const double want = std::ceil(dt * ratio);
   if (!std::isfinite(want) || want > static_cast<double>(kMaxHeatSubsteps))
     throw Error(
-        fmt::format("fluid step {}: the energy equation would need {:f} sub-steps (more "
-                    "than {}): reduce fluid.dt",
-                    steps + 1, want, kMaxHeatSubsteps));
+        fmt::format("fluid step {}: the energy equation would need {:.3g} sub-steps of the "
+                    "step's dt = {:.4g} s (more than {}; the face flows and the conduction "
+                    "through the cells, fluid.conductivity = {:g} W/(m K)): reduce fluid.dt, or "
+                    "the velocities",
+                    steps + 1, want, dt, kMaxHeatSubsteps, prm.heat.conductivity));
   const long long N = std::max(1LL, static_cast<long long>(want));
   const double dts = dt / static_cast<double>(N);
   const bool hasSource = !f.heatSource.data().empty();

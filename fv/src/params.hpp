@@ -28,6 +28,9 @@ struct SetupReuse {
   bool on() const { return interval > 1; }
 };
 
+/// The most sub-steps of the explicit energy update in one fluid step (fv/src/heat.cpp).
+inline constexpr long long kMaxHeatSubsteps = 100000;
+
 struct FluidParams {
   double nu = 0;          // fluid.nu (m^2/s)
   double dtFixed = 0;     // fluid.dt (s): the step, or the largest adaptive step

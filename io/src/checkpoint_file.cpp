@@ -1,6 +1,8 @@
 // Checkpoint file names and options (coloc/io/checkpoint_file.hpp).
 #include "coloc/io/checkpoint_file.hpp"
 
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <filesystem>
 
@@ -23,6 +25,9 @@ CheckpointOptions checkpointOptionsFromConfig(const Config& cfg, const std::stri
 }
 
 namespace {
+
+/// The longest file name (bytes) of the usual file systems (NAME_MAX).
+constexpr std::size_t kMaxFileNameBytes = 255;
 
 bool endsWith(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
@@ -48,6 +53,11 @@ bool matchesStepPattern(const std::string& name, const std::string& pattern) {
 
 std::string runFileRole(const std::string& name) {
   if (name == "report.json") return "the run's report (report.json)";
+  if (name == "log.txt") return "the run's log (log.txt)";
+  if (name == "plan.csv" || name == "plan.json")
+    return "a file of coloc plan (plan.csv, plan.json)";
+  if (name.size() > 11 && name.compare(0, 7, "render_") == 0 && endsWith(name, ".png"))
+    return "a picture of render.py (render_*.png)";
   if (name == "series.csv") return "the run's time series (series.csv)";
   if (name == "snapshot.png") return "the run's snapshot picture (snapshot.png)";
   if (name == "fields.xmf" || name == "particles.xmf") return "the run's XDMF index (" + name + ")";
@@ -81,7 +91,24 @@ std::string checkpointFileProblem(const std::string& file) {
     return q + " names a folder, not a file";
   // The name with {step} as a step: what the run's own files would be called at that step.
   std::string name = normal.filename().string();
-  if (const auto at = name.find("{step}"); at != std::string::npos) name.replace(at, 6, "000000");
+  const auto at = name.find("{step}");
+  if (file.find("{step}") != std::string::npos && at == std::string::npos)
+    return q + " has {step} in a folder's name: only the file's name may hold it";
+  if (at != std::string::npos && name.find("{step}", at + 1) != std::string::npos)
+    return q + " has {step} twice: give it once (it becomes the step, e.g. ck_{step}.h5)";
+  // The longest name the run writes from it: the largest step (19 digits), the failed state's
+  // ".failed" and the ".tmp" of the write; a file system takes 255 bytes a name.
+  {
+    std::string longest = name;
+    if (at != std::string::npos) longest.replace(at, 6, std::string(19, '0'));
+    longest = fs::path(failedCheckpointPath(longest)).filename().string() + ".tmp";
+    if (longest.size() > kMaxFileNameBytes)
+      return fmt::format(
+          "{} is a name of {} bytes: with the step, '.failed' and '.tmp' the run "
+          "would write names of up to {} bytes, and a file system takes {}",
+          q, name.size(), longest.size(), kMaxFileNameBytes);
+  }
+  if (at != std::string::npos) name.replace(at, 6, "000000");
   if (const std::string role = runFileRole(name); !role.empty())
     return q + " is the name of " + role +
            ", which the run writes or removes itself: choose another name (e.g. checkpoint.h5, "

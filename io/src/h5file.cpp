@@ -1,13 +1,21 @@
 // The H5File (create through NAME.tmp, open, close and rename, discard on an error) and its
 // attributes. Layout and rules: coloc/io/h5io.hpp.
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "coloc/core/error.hpp"
 #include "coloc/core/failure.hpp"
 #include "coloc/core/files.hpp"
 #include "coloc/io/h5io.hpp"
@@ -66,6 +74,38 @@ hsize_t attributeLength(hid_t space) {
 
 // ---- H5File -------------------------------------------------------------------------------------
 
+namespace {
+
+/// "" when `path` is a regular file that holds HDF5's signature where HDF5 looks for it (offset
+/// 0, 512, 1024, 2048, ...); otherwise why not. `size` gets the file's size. Local: no MPI, no
+/// HDF5 call.
+std::string hdf5FileProblem(const std::string& path, long long& size) {
+  if (const std::string why = notRegularFile(path); !why.empty()) return why;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return std::string("cannot open: ") + std::strerror(errno);
+  std::string problem = notRegularFile(fd);
+  struct stat st {};
+  if (problem.empty() && ::fstat(fd, &st) != 0) problem = std::strerror(errno);
+  size = st.st_size;
+  if (problem.empty() && st.st_size < 8)
+    problem = st.st_size == 0 ? "cannot open: the file is empty (or the system reports no size "
+                                "for it, as for /proc files): not an HDF5 file"
+                              : "cannot open: too short for an HDF5 file";
+  static const char kSignature[8] = {'\211', 'H', 'D', 'F', '\r', '\n', '\032', '\n'};
+  bool found = false;
+  for (long long at = 0; problem.empty() && !found && at + 8 <= st.st_size;
+       at = at == 0 ? 512 : 2 * at) {
+    char head[8];
+    if (::pread(fd, head, 8, at) != 8) break;
+    found = std::equal(head, head + 8, kSignature);
+  }
+  ::close(fd);
+  if (problem.empty() && !found) problem = "cannot open: not an HDF5 file (no HDF5 signature)";
+  return problem;
+}
+
+}  // namespace
+
 bool hdf5Available() {
   return true;
 }
@@ -81,12 +121,29 @@ H5File H5File::create(const Comm& comm, const std::string& path, bool sync) {
   f.root_ = comm.isRoot();
   f.abortId_ = removeOnAbort(f.writePath_);  // a deadline stop leaves no partial file
   hid_t id = -1;
-  const FlatComm flat(comm.raw());
+  // Rank 0 checks the name and what is there (a regular file or nothing: never a link, a folder
+  // or a device; coloc/core/files.hpp) and makes NAME.tmp afresh, so that HDF5 opens a new
+  // regular file and no link; the verdict is shared before the collective create.
   ioCollective(comm, path, [&] {
-    Hid fapl = mpioFapl(flat, true);
-    id = H5Fcreate(f.writePath_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
-    if (id < 0) throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
+    if (!comm.isRoot()) return;
+    if (const std::string why = writeTargetProblem(path); !why.empty()) throw LocalFailure(why);
+    try {
+      ::close(createFresh(f.writePath_));
+    } catch (const Error& e) {
+      throw LocalFailure(e.what());
+    }
   });
+  const FlatComm flat(comm.raw());
+  try {
+    ioCollective(comm, path, [&] {
+      Hid fapl = mpioFapl(flat, true);
+      id = H5Fcreate(f.writePath_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+      if (id < 0) throw LocalFailure("cannot create '" + f.writePath_ + "': " + h5ErrorText());
+    });
+  } catch (const Error&) {
+    if (comm.isRoot()) ::unlink(f.writePath_.c_str());  // the empty NAME.tmp made above
+    throw;
+  }
   f.id_ = id;
   return f;
 }
@@ -98,11 +155,22 @@ H5File H5File::openRead(const Comm& comm, const std::string& path) {
   f.path_ = f.writePath_ = path;
   f.root_ = comm.isRoot();
   hid_t id = -1;
+  // Every rank checks, without MPI, what it sees (a regular file: H5Fopen of a FIFO would wait
+  // for a writer; HDF5's signature where HDF5 looks for it), and the ranks agree that they see
+  // the same file (its size), all before the collective open: a file that is no HDF5 file, or
+  // that reads differently on different ranks (/proc/self/...), would otherwise send the ranks
+  // into different collectives inside HDF5's open, where no deadline reaches them.
+  long long size = -1;
   collective(comm, path, [&] {
-    // A regular file only: H5Fopen of a FIFO would wait for a writer (coloc/core/files.hpp).
-    const std::string problem = notRegularFile(path);
+    const std::string problem = hdf5FileProblem(path, size);
     if (!problem.empty()) throw LocalFailure(problem);
   });
+  const long long lo = comm.min(size), hi = comm.max(size);
+  if (lo != hi)
+    comm.raiseIfAny(comm.isRoot() ? fmt::format("{}: the ranks see files of different sizes "
+                                                "({} and {} bytes): not one file",
+                                                path, lo, hi)
+                                  : std::string());
   const FlatComm flat(comm.raw());
   collective(comm, path, [&] {
     Hid fapl = mpioFapl(flat, false);
@@ -189,12 +257,10 @@ void H5File::close() {
   if (failedSomewhere) failureShared();
   if (writable_ && comm_.isRoot()) {
     std::error_code ec;
-    if (failedSomewhere) {
+    if (failedSomewhere)
       std::filesystem::remove(writePath_, ec);
-    } else {
-      std::filesystem::rename(writePath_, path_, ec);
-      if (ec) err = "cannot rename '" + writePath_ + "' to '" + path_ + "': " + ec.message();
-    }
+    else  // over a regular file only; a failed rename removes NAME.tmp (coloc/core/files.hpp)
+      err = publishFile(writePath_, path_);
   }
   forgetOnAbort(std::exchange(abortId_, 0));
   if (const std::string msg = comm_.firstError(err, 4); !msg.empty()) throw IoError(msg);

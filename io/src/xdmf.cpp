@@ -6,10 +6,10 @@
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "coloc/core/error.hpp"
+#include "coloc/core/files.hpp"
 #include "io_reason.hpp"
 
 namespace coloc {
@@ -146,20 +146,12 @@ std::string XdmfSeries::xml() const {
 void XdmfSeries::write(const Comm& comm, const std::string& path) const {
   std::string err;
   if (comm.isRoot()) {
-    const std::string tmp = path + ".tmp";
-    {
-      std::ofstream out(tmp, std::ios::trunc);
-      errno = 0;
-      out << xml();
-      out.flush();
-      if (!out) err = "cannot write '" + tmp + "'" + ioReason();
+    // PATH.tmp made afresh and renamed over a regular file only (coloc/core/files.hpp)
+    try {
+      writeFileWhole(path, xml());
+    } catch (const std::exception& e) {
+      err = e.what();
     }
-    std::error_code ec;
-    if (err.empty()) {
-      std::filesystem::rename(tmp, path, ec);
-      if (ec) err = "cannot rename '" + tmp + "' to '" + path + "': " + ec.message();
-    }
-    if (!err.empty()) std::filesystem::remove(tmp, ec);
   }
   if (const std::string msg = comm.firstError(err, 4); !msg.empty()) throw IoError(msg);
 }

@@ -160,3 +160,35 @@ TEST(Config, NameLists) {
             "got an integer");
   EXPECT_NE(s.describe().find("each one of a b c"), std::string::npos);
 }
+
+// Optional keys (issue 50): no default and no sentinel; absent from the resolved case when not
+// given, range-checked when given. A unique name list refuses a name given twice.
+TEST(Config, OptionalKeysHaveNoSentinel) {
+  Schema s;
+  s.optionalNumber("wall.temperature", "K", Range::between(0.0, 1e6));
+  s.number("wall.other", 1.0, "x");
+  s.nameList("run.columns", {"a"}, "columns", {"a", "b"}, /*dottedNames=*/false, /*unique=*/true);
+  const auto absent = Config::fromText("{}", "case.json", {}, s);
+  EXPECT_FALSE(absent.has("wall.temperature"));
+  EXPECT_FALSE(absent.optionalNumber("wall.temperature").has_value());
+  EXPECT_FALSE(absent.json()["wall"].contains("temperature"));  // not shown in a report either
+  const auto given = Config::fromText(R"({ "wall": { "temperature": 350 } })", "case.json", {}, s);
+  EXPECT_EQ(given.optionalNumber("wall.temperature").value(), 350.0);
+  auto error = [&](const std::vector<std::string>& over) {
+    try {
+      Config::fromText("{}", "case.json", over, s);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error({"wall.temperature=-7"}),
+            "wall.temperature: value -7 is out of range, expected [0, 1000000]");
+  EXPECT_EQ(error({"run.columns=a,b,a"}), "run.columns: 'a' is given twice");
+  EXPECT_NE(s.describe().find("wall.temperature  (a number, optional"), std::string::npos);
+  // a --set list index of any length: out of range, never an exception of the parser
+  EXPECT_EQ(errorOf(R"({ "domain": { "length": [1, 1, 1] }, "particles": { "sources": [] } })",
+                    {"particles.sources.99999999999999999999.count=1"}),
+            "particles.sources.99999999999999999999.count: list index 99999999999999999999 is "
+            "out of range (size 0)");
+}

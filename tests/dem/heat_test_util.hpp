@@ -37,14 +37,17 @@ inline std::string chainCase() {
 
 /// A box of 12 mm with a lattice of 5 x 5 x 6 spheres (r = 1 mm) slightly overlapping (spacing
 /// 1.98 mm), under gravity: the lower three layers at 400 K, the upper three at 300 K; walls at
-/// wallT (0: adiabatic). kHeatBedN particles, ids 0 .. kHeatBedN - 1.
+/// wallT (0: adiabatic, particles.wall_temperature left out). kHeatBedN particles, ids 0 ..
+/// kHeatBedN - 1.
 inline std::string heatBed(double wallT) {
+  char wall[64] = "";
+  if (wallT > 0) std::snprintf(wall, sizeof wall, R"( "wall_temperature": %.17g,)", wallT);
   char buf[2048];
   std::snprintf(buf, sizeof buf, R"({
   "domain": {"length": [0.012, 0.012, 0.012], "cells": [6, 6, 6]},
   "gravity": [0, 0, -9.81],
   "particles": {
-    "dt": 1e-5, "heat": true, "wall_temperature": %.17g,
+    "dt": 1e-5, "heat": true,%s
     "materials": [{"density": 2500, "young": 1e7, "restitution": 0.5,
                    "heat_capacity": 0.2, "conductivity": 2}],
     "sources": [{"type": "lattice", "lo": [0.00204, 0.00204, 0.00101], "counts": [5, 5, 3],
@@ -53,7 +56,7 @@ inline std::string heatBed(double wallT) {
                  "spacing": [0.00198, 0.00198, 0.00198], "radius": 0.001, "temperature": 300}]
   }
 })",
-                wallT);
+                wall);
   return buf;
 }
 constexpr long kHeatBedN = 150;

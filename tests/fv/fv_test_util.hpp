@@ -86,6 +86,26 @@ inline coloc::Real3 cellPos(const coloc::Decomposition& dec, int i, int j, int k
   return facePos(dec, -1, i, j, k);
 }
 
+/// ||(eps^{n+1}-eps^n)/dt + div(eps_f u)||_2 over all cells (u's ghosts on the block's high
+/// faces current: call cellVelocity() first).
+inline double continuityNorm(const coloc::Decomposition& dec, const coloc::fv::FluidFields& f,
+                             const coloc::CellField& epsN, double dt) {
+  double s2 = 0;
+  const auto& g = dec.grid();
+  coloc::forEach(coloc::IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
+    double div = 0;
+    for (int a = 0; a < 3; ++a) {
+      const int di = a == 0, dj = a == 1, dk = a == 2;
+      const double elo = 0.5 * (f.eps(i, j, k) + f.eps(i - di, j - dj, k - dk));
+      const double ehi = 0.5 * (f.eps(i, j, k) + f.eps(i + di, j + dj, k + dk));
+      div += (ehi * f.u[a](i + di, j + dj, k + dk) - elo * f.u[a](i, j, k)) / g.spacing(a);
+    }
+    const double c = (f.eps(i, j, k) - epsN(i, j, k)) / dt + div;
+    s2 += c * c;
+  });
+  return std::sqrt(dec.comm().sum(s2));
+}
+
 /// Run until the steady residual drops below `tol` or `maxSteps` are done; returns the steps.
 inline long long runSteady(coloc::fv::FluidSolver& s, double tol, long long maxSteps) {
   long long n = 0;

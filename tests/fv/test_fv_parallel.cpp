@@ -74,25 +74,6 @@ void compare(const Decomposition& pa, const Field3<double>& a, const Decompositi
   });
 }
 
-/// ||(eps^{n+1}-eps^n)/dt + div(eps_f u)||_2 over all cells.
-double continuityNorm(const Decomposition& dec, const fv::FluidFields& f, const CellField& epsN,
-                      double dt) {
-  double s2 = 0;
-  const auto& g = dec.grid();
-  forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
-    double div = 0;
-    for (int a = 0; a < 3; ++a) {
-      const int di = a == 0, dj = a == 1, dk = a == 2;
-      const double elo = 0.5 * (f.eps(i, j, k) + f.eps(i - di, j - dj, k - dk));
-      const double ehi = 0.5 * (f.eps(i, j, k) + f.eps(i + di, j + dj, k + dk));
-      div += (ehi * f.u[a](i + di, j + dj, k + dk) - elo * f.u[a](i, j, k)) / g.spacing(a);
-    }
-    const double c = (f.eps(i, j, k) - epsN(i, j, k)) / dt + div;
-    s2 += c * c;
-  });
-  return std::sqrt(dec.comm().sum(s2));
-}
-
 }  // namespace
 
 /// Steps the case on `par` and alone on this rank, checks continuity every step and the fields
@@ -120,7 +101,8 @@ void compareWithSerial(Solo& par, std::vector<std::string> overrides = {}) {
     ser.solver.step(dt);
     // Fill u's ghosts (the high faces of the block) through cellVelocity, then check continuity.
     par.solver.cellVelocity(par.uc);
-    const double cont = continuityNorm(par.dec, std::as_const(par.solver).fields(), epsN, dt);
+    const double cont =
+        fvtest::continuityNorm(par.dec, std::as_const(par.solver).fields(), epsN, dt);
     const Json d = par.solver.diagnostics();
     const double bound = 1.05 * kTol * d["pressure"]["rhs_scale_last"].get<double>();
     EXPECT_LE(cont, bound) << "step " << n;

@@ -88,24 +88,11 @@ struct Channel {
     CellField epsN = std::as_const(solver).fields().epsOld;
     const double dt = solver.nextDt();
     solver.step(dt);
-    const auto& f = std::as_const(solver).fields();
-    double s2 = 0;
-    const auto& g = dec.grid();
     std::array<CellField, 3> uc;
     solver.cellVelocity(uc);  // the high faces' ghosts
-    forEach(IndexBox{{0, 0, 0}, dec.cells()}, [&](int i, int j, int k) {
-      double div = 0;
-      for (int a = 0; a < 3; ++a) {
-        const int di = a == 0, dj = a == 1, dk = a == 2;
-        const double elo = 0.5 * (f.eps(i, j, k) + f.eps(i - di, j - dj, k - dk));
-        const double ehi = 0.5 * (f.eps(i, j, k) + f.eps(i + di, j + dj, k + dk));
-        div += (ehi * f.u[a](i + di, j + dj, k + dk) - elo * f.u[a](i, j, k)) / g.spacing(a);
-      }
-      const double c = (f.eps(i, j, k) - epsN(i, j, k)) / dt + div;
-      s2 += c * c;
-    });
+    const double cont = fvtest::continuityNorm(dec, std::as_const(solver).fields(), epsN, dt);
     const Json d = solver.diagnostics();
-    return std::sqrt(dec.comm().sum(s2)) / d["pressure"]["rhs_scale_last"].get<double>();
+    return cont / d["pressure"]["rhs_scale_last"].get<double>();
   }
   long long setups() const { return solver.counters().setups; }
 };

@@ -7,6 +7,9 @@
   set DATASET EXPR   rewrite the dataset through h5py (a valid checksum) with the values EXPR
                      makes of the array `a` (numpy as np), e.g. "a[3] = a[4]": a file that is
                      intact as HDF5 but impossible as a state (the restore's semantic checks)
+  attr OBJECT NAME EXPR  set attribute NAME of OBJECT ("/" for the file) to the value of EXPR
+                     (numpy as np), e.g. "np.int64(-5)", "np.float64('nan')", "np.bytes_(b'[' * 9)"
+                     (a fixed-length string, as coloc writes them)
 """
 import shutil
 import sys
@@ -34,5 +37,9 @@ elif mode == "set":
         exec(sys.argv[5], {"np": np, "a": a})
         f[ds][...] = a
     print(f"{dst}: {ds}: {sys.argv[5]}")
+elif mode == "attr":
+    with h5py.File(dst, "r+") as f:
+        f[ds].attrs[sys.argv[5]] = eval(sys.argv[6], {"np": np})
+    print(f"{dst}: {ds} attribute {sys.argv[5]} = {sys.argv[6][:60]}")
 else:
     sys.exit(f"unknown mode {mode}")

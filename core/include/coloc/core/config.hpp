@@ -64,7 +64,9 @@ class Schema;
 /// item's "type" field (or a single item schema under the name "").
 struct KeySpec {
   KeyKind kind = KeyKind::Number;
-  Json defaultValue;                 // null: required
+  Json defaultValue;                 // null: required (unless optional)
+  bool optional = false;             // absent: left out of the resolved case (no default)
+  bool unique = false;               // NameList: each name at most once
   Range range;                       // numbers, integers, and each component of vectors
   std::vector<std::string> choices;  // strings: allowed values (empty: any)
   bool dottedNames = false;          // NameList: names with a '.' pass too (the caller checks them)
@@ -77,6 +79,10 @@ class Schema {
  public:
   Schema& number(const std::string& path, std::optional<double> def, const std::string& help,
                  Range r = Range::any());
+  /// A number that may be left out, with no default standing in for it: absent, the key is
+  /// missing from the resolved case too (Config::optionalNumber gives std::nullopt), so that no
+  /// sentinel value (-1, 0) can be mistaken for a given one; given, it is checked like any number.
+  Schema& optionalNumber(const std::string& path, const std::string& help, Range r = Range::any());
   Schema& integer(const std::string& path, std::optional<long long> def, const std::string& help,
                   Range r = Range::any());
   Schema& boolean(const std::string& path, bool def, const std::string& help);
@@ -91,9 +97,10 @@ class Schema {
   /// A non-empty list of names, each one of `choices`: a JSON list of strings, or one string of
   /// names separated by commas or spaces (`--set run.progress_columns=step,time`). Resolved to
   /// the list. With `dottedNames`, a name holding a '.' passes too (a key path the caller
-  /// checks, e.g. a report.json key as a progress column).
+  /// checks, e.g. a report.json key as a progress column). `unique`: a name given twice is
+  /// refused (a list of columns, each shown once).
   Schema& nameList(const std::string& path, std::vector<std::string> def, const std::string& help,
-                   std::vector<std::string> choices, bool dottedNames = false);
+                   std::vector<std::string> choices, bool dottedNames = false, bool unique = false);
   /// An optional object whose keys depend on its "type" (e.g. a boundary condition).
   Schema& variant(const std::string& path, std::map<std::string, Schema> byType,
                   const std::string& defaultType, const std::string& help);
@@ -140,6 +147,11 @@ class Config {
   bool has(const std::string& path) const;
   const Json& at(const std::string& path) const;
   double number(const std::string& path) const { return at(path).get<double>(); }
+  /// A key declared with Schema::optionalNumber: its value, or std::nullopt when not given.
+  std::optional<double> optionalNumber(const std::string& path) const {
+    if (!has(path)) return std::nullopt;
+    return at(path).get<double>();
+  }
   long long integer(const std::string& path) const { return at(path).get<long long>(); }
   bool boolean(const std::string& path) const { return at(path).get<bool>(); }
   std::string string(const std::string& path) const { return at(path).get<std::string>(); }

@@ -46,6 +46,9 @@ struct RunCounters {
   /// Convection: the worst mismatch over the run between the heat the particles received and
   /// the heat the fluid lost in a step, relative to the gross exchanged heat sum |q| dt.
   double heatResidual = 0;
+  /// Convection: the heat exchanged between the fluid and the particles over the run, sum over
+  /// the steps and particles of |q| dt (J): the scale of checks.energy_balance.
+  double heatExchanged = 0;
 };
 /// The counters as attributes of `group` (created), and back (one table, checkpoint.cpp).
 void writeRunCounters(H5File& file, const std::string& group, const RunCounters& c);

@@ -75,7 +75,10 @@ class ParticleCoupling;
 /// checks.energy_balance of a run with heat on both sides: |gain of the fluid's and the
 /// particles' enthalpies - heat in through faces, walls and the particles' inflow and outflow|,
 /// relative (the reports' fluid_heat and particles.heat objects).
-double energyBalance(const Json& fluidHeat, const Json& particleHeat);
+/// With `exchanged` > 0 (J, the heat the phases exchanged over the run: report.json
+/// coupling.heat_transfer.exchanged) the residual is relative to it instead
+/// (checks.energy_balance_exchanged).
+double energyBalance(const Json& fluidHeat, const Json& particleHeat, double exchanged = 0);
 
 /// Declares the "coupling.*" keys.
 void declareConfig(Schema& s);

@@ -212,6 +212,13 @@ class DemSolver {
   double dt() const;
   double time() const;
   void setFrozen(bool frozen);
+  /// particles.heat: the external heat rates just written into `heat_ext` are meant for the next
+  /// `substeps` sub-steps (one CFD step of the coupling, which charged the fluid q dt for each
+  /// particle). A particle removed at an outflow face before they have passed takes the heat of
+  /// the sub-steps it did not see with it: its outflow enthalpy and ext_heat_in count q times
+  /// the time left, so that the particles receive exactly what the fluid gave (docs/heat.md,
+  /// "Energy accounts"). 0 (the default): heat_ext is held without an end, as written.
+  void holdExternalHeat(long long substeps);
   long long globalCount() const;  // collective
   /// Report entries: particles.{count,contacts_per_particle,rebuilds,...}. Collective.
   Json diagnostics() const;
