@@ -14,8 +14,9 @@
 //                               after the state file's buffers are gone), and the time split of
 //                               the timed steps; the solver's bytes by part go to stderr.
 //                               DEM_BED_DUMP=file writes the settled bed as a LIGGGHTS data file.
-//                               DEM_BED_SAVE=file (1 rank) writes the settled DemState (particles,
-//                               forces, contact histories; binary), DEM_BED_LOAD=file restores it
+//                               DEM_BED_SAVE=file writes the settled DemState (particles,
+//                               forces, contact histories; binary; on P > 1 ranks each rank's
+//                               rows to file.r<rank>), DEM_BED_LOAD=file restores it
 //                               instead of settling (rank r reads rows [r n/P, (r+1) n/P); the
 //                               restoring constructor sends them to their owners).
 // Benchmarks that exchange MPI messages use fixed iteration counts so every rank runs the same
@@ -235,8 +236,11 @@ void BM_DemBed(benchmark::State& state) {
   // resident growth at the end (rss_run_per_particle) is the solver's, not the loader's leftovers
   if (load) malloc_trim(0);
   for (int s = 0; s < settle; ++s) dem.substep();
-  if (const char* save = std::getenv("DEM_BED_SAVE"); save && dec.size() == 1)
-    saveState(dem.saveState(), save);
+  // (on P > 1 ranks each rank's own rows to FILE.r<rank>: a comparison of two builds at the same
+  // rank count, file by file)
+  if (const char* save = std::getenv("DEM_BED_SAVE"))
+    saveState(dem.saveState(),
+              dec.size() == 1 ? std::string(save) : save + (".r" + std::to_string(dec.rank())));
   // DEM_BED_DUMP=file (1 rank): the settled bed as a LIGGGHTS/LAMMPS data file (atom_style
   // granular), for the side-by-side comparison of docs/dem.md.
   if (const char* dump = std::getenv("DEM_BED_DUMP"); dump && dec.size() == 1) {
@@ -292,6 +296,7 @@ void BM_DemBed(benchmark::State& state) {
   state.counters["rss_run_per_particle"] =
       static_cast<double>(comm.sum(residentBytes()) - comm.sum(rssStart)) / static_cast<double>(n);
   state.counters["rebuilds"] = static_cast<double>(dem.rebuildCount());
+  state.counters["prunes"] = d["prunes"].get<double>();
   const auto share = [&](coloc::Phase ph) { return comm.max(timers.seconds(ph)) / wall; };
   state.counters["f_neighbour"] = share(coloc::Phase::DemNeighbour);
   state.counters["f_force"] = share(coloc::Phase::DemForce);

@@ -58,9 +58,11 @@ KERNELS = [
     {
         "name": "dem_pair_forces", "timer": "dem_force", "per": "substep",
         "unit": "touching pair", "primary": "touching", "isa": "avx512",
-        "where": "dem/src/forces.cpp ForcePass::gather, gatherPair, flush, pairContact; "
-                 "dem/src/pairs.hpp pairChunk; dem/src/contact.hpp pairForce<HertzMindlin, "
-                 "no rolling> (-march=native, -ffp-contract=off)",
+        "where": "dem/src/force_pass.hpp ForcePass::run, ScalarRows::row (forces_avx512.cpp "
+                 "Avx512Rows::row with particles.force_isa=avx512), gatherPair, flush, "
+                 "pairContact; dem/src/pairs.hpp pairChunk; dem/src/contact.hpp "
+                 "pairForce<HertzMindlin, no rolling> (-march=native, -ffp-contract=off); the "
+                 "list term counts every entry: with the pruned inner list a pass reads fewer",
         "terms": [
             T("particles", 192, 0,
               "Body 64 R (x, r, v, m packed), omega 24 R, f 24 R+W, torque 24 R+W, rowStart 4, "

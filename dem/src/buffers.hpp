@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -76,5 +77,10 @@ void trimRows(std::vector<T>& v, std::size_t floor = 0) {
     hugePages(v);
   }
 }
+
+/// Room that one part lends another while its own contents are dead (the force part's packed
+/// bodies from the start of a rebuild to the next force pass, lent to the history packing):
+/// lend(bytes) returns at least that many bytes, 64-byte aligned, grown if needed (grow-only).
+using Lender = std::function<unsigned char*(std::size_t bytes)>;
 
 }  // namespace coloc::dem::detail

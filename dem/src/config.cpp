@@ -65,6 +65,18 @@ void declareConfig(Schema& s) {
            "Verlet skin as a fraction of the largest particle diameter; lists are rebuilt when a "
            "particle moved more than skin/2; at most 10",
            Range::openClosed(0.0, 10.0));
+  s.number("particles.prune_margin", 0.05,
+           "gap below which a Verlet-list entry stays in the pruned inner list, as a fraction of "
+           "the largest particle diameter: the force passes visit only those entries until any "
+           "two particles may have closed it (bit for bit the same results); 0: no inner list",
+           Range::between(0.0, 10.0));
+  s.string("particles.force_isa", "scalar",
+           "how the force pass tests the list entries: scalar (entry by entry, the build's "
+           "target), avx512 (eight entries of a row at a time; refused on a CPU without AVX-512), "
+           "widest (avx512 where the CPU has it, else scalar); the same results, bit for bit. "
+           "avx512 pays where rows hold many entries that do not touch (a settled bed: ~5 %), "
+           "scalar where most touch (case3-small in contact: avx512 is ~15 % slower there)",
+           {"scalar", "avx512", "widest"});
   s.string("particles.contact_model", "hertz_mindlin",
            "hertz_mindlin: Hertz normal + Mindlin no-slip tangential with history (LIGGGHTS "
            "formulas); linear: spring-dashpot with history",

@@ -69,6 +69,10 @@ inline PairCoeff mix(const Material& a, const Material& b, double linKn, double 
   return c;
 }
 
+// The contact law itself has internal linkage: the force pass is compiled once per instruction
+// set (force_pass.hpp), and no inline function of one may stand in for the other's at link time.
+namespace {  // NOLINT(google-build-namespaces,cert-dcl59-cpp)
+
 inline double dot3(const double* a, const double* b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
@@ -161,6 +165,8 @@ inline double contactForce(const PairCoeff& c, double dt, bool update, const dou
   for (int k = 0; k < 3; ++k) T[k] -= roll[k];
   return fn;
 }
+
+}  // namespace
 
 /// Elastic energy stored in the normal spring at overlap delta.
 inline double normalEnergy(Model m, const PairCoeff& c, double delta, double Reff) {

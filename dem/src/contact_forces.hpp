@@ -41,6 +41,13 @@ struct ContactLaw {
   std::vector<PairCoeff> wall;  // [a]
 };
 
+/// Which build of the force pass runs (particles.force_isa): the build's own target (pass 1
+/// entry by entry), AVX-512 (pass 1 eight entries of a row at a time), or the widest the CPU
+/// has. All give the same bits.
+enum class ForceIsa { Widest, Scalar, Avx512 };
+
+struct HeatPass;  // heat.hpp
+
 /// What a force computation works on, lent by the owner for the call.
 struct ForceInputs {
   ParticleStore& p;         // f and torque written (owned), the rest read
@@ -55,20 +62,25 @@ class ContactForces {
 
   /// Forces at the current state into f and torque of the owned particles: gravity + fExt +
   /// contacts + walls; `update`: the shear histories advance; `stepped`: inside the step, where
-  /// the owned bodies and the reset sums are current when packed() (the integration's).
-  void compute(const ForceInputs& in, bool update, bool stepped);
+  /// the owned bodies and the reset sums are current when packed() (the integration's); `heat`
+  /// (or nullptr): contact conduction in the same pass (force_pass.hpp).
+  void compute(const ForceInputs& in, bool update, bool stepped, HeatPass* heat);
+  /// The build of the force pass to run; false (and unchanged) when the CPU lacks it.
+  bool selectIsa(ForceIsa want);
+  ForceIsa isa() const { return isa_; }
   /// The bodies match the particles (see above).
   bool packed() const { return packed_; }
   /// The packed bodies (index = local particle), written by the integration when packed().
   Body* bodies() { return body_.data(); }
   /// The particles change order or count (a rebuild): the next compute() packs every body.
   void unpack() { packed_ = false; }
+  /// The bodies' storage lent while unpacked (its contents are dead until the next compute()):
+  /// at least `bytes`, grown if needed.
+  unsigned char* lend(std::size_t bytes);
   const ContactTally& tally() const { return tally_; }
   std::size_t bodyBytes() const { return cap(body_); }
 
  private:
-  template <Model M, bool Rolling>
-  void run(const ForceInputs& in, bool update, bool stepped);
   /// The force and torque sums reset to gravity + fExt for the owned particles, and the bodies
   /// sized for every local particle.
   void resetSums(const ForceInputs& in);
@@ -78,6 +90,7 @@ class ContactForces {
   PairChunk chunk_;
   std::vector<Body> body_;
   bool packed_ = false;
+  ForceIsa isa_ = ForceIsa::Scalar;
   ContactTally tally_;
 };
 

@@ -50,9 +50,10 @@ using namespace detail;
 void DemSolver::Impl::substep() {
   if (frozen) return frozenSubstep();
   if (!inflow.empty()) timed(Phase::DemNeighbour, [&] { insertInflow(); });
-  timed(Phase::DemIntegrate, [&] { integrator.initialIntegrate(p, forces); });
+  const double v2 =
+      timed(Phase::DemIntegrate, [&] { return integrator.initialIntegrate(p, forces); });
   timers.syncPoint(comm);
-  if (timed(Phase::DemNeighbour, [&] { return decideRebuild(); }))
+  if (timed(Phase::DemNeighbour, [&] { return decideRebuild(v2); }))
     rebuild(false);
   else
     timed(Phase::DemGhost, [&] { exchange->updateGhosts(); });
@@ -104,7 +105,7 @@ void DemSolver::Impl::checkOverlap(double globalMax) {
   comm.raiseIfAny(msg);
 }
 
-bool DemSolver::Impl::decideRebuild() {
+bool DemSolver::Impl::decideRebuild(double v2) {
   double m2 = search.maxDisplacement2(p);
   const std::size_t n = p.nOwned;
   // a centre beyond an outflow face, or particles entering, rebuild now (removal, insertion)
@@ -116,10 +117,13 @@ bool DemSolver::Impl::decideRebuild() {
         m2 = std::numeric_limits<double>::max();
         break;
       }
-  double buf[2] = {m2, forces.tally().maxOverlap};
-  comm.maxInPlace(std::span<double>(buf, 2));
+  // the same reduction carries the largest drift velocity: the inner list's displacement bound
+  double buf[3] = {m2, forces.tally().maxOverlap, v2};
+  comm.maxInPlace(std::span<double>(buf, 3));
   checkOverlap(buf[1]);
-  return buf[0] > 0.25 * skin * skin;
+  const bool rebuild = buf[0] > 0.25 * skin * skin;
+  if (!rebuild) search.moved(integrator.dt * std::sqrt(buf[2]));  // (a rebuild ends it anyway)
+  return rebuild;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -129,7 +133,8 @@ void DemSolver::Impl::rebuild(bool first) {
   forces.unpack();  // the particles change order (and count): the next force pass packs them
   {
     ScopedPhase t(timers, Phase::DemMigrate);
-    if (!first) search.packHistory(p, dec, comm.size());
+    if (!first)
+      search.packHistory(p, dec, comm.size(), [&](std::size_t b) { return forces.lend(b); });
     if (anyOutflow) removeOutflow();
     if (!incoming.empty()) {
       p.nGhost = 0;
@@ -254,6 +259,7 @@ Json DemSolver::diagnostics() const {
   j["ghosts"] = static_cast<long long>(loc[3]);
   j["neighbors_per_particle"] = loc[4] / n;
   j["rebuilds"] = m.rebuilds;
+  j["prunes"] = m.search.pruneCount();
   j["bytes_per_particle"] = loc[5] / n;
   {  // the same by part (every rank has the same parts in the same order)
     const Json parts = m.memoryByPart();

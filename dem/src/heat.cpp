@@ -37,7 +37,7 @@ void HeatTransfer::setup(const Config& cfg, const std::vector<Material>& mats, P
   iExt = p.addField("heat_ext", 1, kOpMigrate | kOpState);
 }
 
-// The entries in the force pass's order (forces.cpp: ForcePass::gather): holders in K order,
+// The entries in the force pass's order (force_pass.hpp: ForcePass::run): holders in K order,
 // each pair once with the lower-K particle (the holder) first, then the holder's walls. The
 // touching test is the force pass's (same operands: the bodies are copies of x).
 void HeatTransfer::conduct(ParticleStore& p, const NeighbourSearch& s) {

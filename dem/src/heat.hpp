@@ -10,13 +10,16 @@
 //   heat_ext     qExt (W) written by the coupling per owned particle, held over the sub-steps
 //                         (like fExt): migration, state
 //
-// Conduction runs as its own pass over the half Verlet list after the force pass (chosen once:
-// the force pass is the same code with heat off), visiting the entries in the force pass's order
-// and computing each pair once with the lower-K particle first. An owned-ghost pair is computed
-// by each rank for its own particle from the same operands (the ghost's T is current: ghost
-// update), so the heat one particle gains is the heat the other loses, bit for bit, across ranks.
+// Conduction rides the force pass (force_pass.hpp, forcePass() below: the partners' lines are in
+// cache there; with heat off that pass is compiled without it), in the list's order, each pair
+// once with the lower-K particle first. An owned-ghost pair is computed by each rank for its own
+// particle from the same operands (the ghost's T is current: ghost update), so the heat one
+// particle gains is the heat the other loses, bit for bit, across ranks. conduct() is the same
+// arithmetic as a pass of its own over the touching entries (frozen sub-steps, which compute no
+// forces).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -25,6 +28,20 @@
 #include "neighbour_search.hpp"
 
 namespace coloc::dem::detail {
+
+/// Heat conduction inside the force pass (force_pass.hpp): what it reads, and what it writes (Q
+/// of the owned particles, zeroed by HeatTransfer::forcePass; the heat into the particles through
+/// the walls).
+struct HeatPass {
+  const double* T;
+  double* Q;
+  const double* kPair;  // [a * nMat + b]
+  const double* kWall;  // [a]
+  int nMat;
+  double wallT;
+  bool walls;  // wallT > 0
+  double wallRate = 0;
+};
 
 class HeatTransfer {
  public:
@@ -52,6 +69,15 @@ class HeatTransfer {
   /// Q of the owned particles from the contacts at the current positions and temperatures
   /// (ghosts' T current); the wall heat rate of this rank into wallRate().
   void conduct(ParticleStore& p, const NeighbourSearch& s);
+  /// Conduction inside the next force pass (with contact conduction): Q of the owned particles
+  /// zeroed, the pass's inputs; the pass's wall heat rate goes back through setWallRate().
+  HeatPass forcePass(ParticleStore& p) const {
+    double* Q = p.extra[iQ].data[0].data();
+    std::fill(Q, Q + p.nOwned, 0.0);
+    return HeatPass{
+        p.extra[iT].data[0].data(), Q, kPair.data(), kWall.data(), nMat, wallT, wallT > 0};
+  }
+  void setWallRate(double w) { wallRate_ = w; }
   /// T += dt (Q + qExt) / (m c_p) for the owned particles; the accounts advance by dt.
   void integrate(ParticleStore& p, double dt);
   /// Owned particle i leaves (outflow) in the sub-step now running, before its temperature

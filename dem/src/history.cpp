@@ -14,6 +14,25 @@ namespace coloc::dem {
 
 using namespace detail;
 
+int HistoryPool::newSlot() {
+  std::size_t s;
+  if (!freeSlots.empty()) {
+    s = static_cast<std::size_t>(freeSlots.back());
+    freeSlots.pop_back();
+  } else {
+    s = slots();
+    ensure(hS, 3 * s + 3);
+    hS.resize(3 * s + 3);
+  }
+  hS[3 * s] = hS[3 * s + 1] = hS[3 * s + 2] = 0;
+  return static_cast<int>(s);
+}
+
+void HistoryPool::freeSlot(int s) {
+  ensure(freeSlots, freeSlots.size() + 1);
+  freeSlots.push_back(s);
+}
+
 void HistoryPool::keepRows(std::size_t w, int h0, int h1, int& hw) {
   hStart[w] = hw;
   for (int e = h0; e < h1; ++e, ++hw) {
@@ -53,14 +72,17 @@ void DemSolver::Impl::keepRow(std::size_t i, std::size_t w, int h0, int h1, int&
   detail::keepRow(p, search.mutableHistory(), i, w, h0, h1, hw);
 }
 
-void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks) {
+void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks,
+                                  const Lender& lend) {
   // The history pool becomes rows per owned particle (the format migration carries and the list
   // build reads), keyed by the partner's global id (walls: -1..-6), shear as seen from the row's
   // particle. An owned-ghost pair has one row, under its owned particle; an owned-owned pair one
   // under its holder, and a second one under the partner when the two are bound for different
   // ranks or only one of them wraps across a periodic face (the pair is then computed by each
-  // side for its own particle, with its own copy, as every owned-ghost pair). Done in place: the
-  // live pool slots are permuted into row order (no second pool).
+  // side for its own particle, with its own copy, as every owned-ghost pair). The live slots are
+  // gathered into row order in a buffer lent by the owner (the packed bodies, dead from the start
+  // of a rebuild to the next force pass: loads at independent addresses, where a walk along the
+  // permutation's cycles in place was a chain of dependent ones), then copied back.
   const std::size_t n = p.nOwned, nAll = p.size();
   // scratch: the destination code of every particle, then the row cursors
   ensure(scratch_, 2 * n);
@@ -108,24 +130,14 @@ void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& d
   }
   for (std::size_t i = 0; i < n; ++i) hist_.hStart[i + 1] += hist_.hStart[i];
   const auto T = static_cast<std::size_t>(hist_.hStart[n]);
-  const std::size_t M = std::max(T, hist_.slots());
-  // the keys' array held x0 until now (the rebuild check is done)
+  // pass 2: every live slot's shear to its row (and the second copy), oriented, into the buffer;
+  // its key beside it. The keys' array held x0 until now (the rebuild check is done).
+  constexpr std::size_t kRec = 3 * sizeof(double);
+  unsigned char* const buf = lend(T * kRec);
   std::vector<double>& key = hist_.hKey;
-  ensure(key, M);
-  key.resize(M);
-  ensure(hist_.hS, 3 * M);
-  hist_.hS.resize(3 * M);
-  // target position of every pool slot (live ones to their row, the others to the free rows),
-  // kept in the keys' array, which pass 2 overwrites with the keys: bits 0-31 the target, bit 32
-  // "position taken", bit 33 "moved" (integers below 2^34, exact in the doubles)
-  constexpr std::int64_t kNone = 0xffffffffLL, kTakenPos = 1LL << 32, kMoved = 1LL << 33;
-  const auto get = [&](std::size_t s) { return static_cast<std::int64_t>(key[s]); };
-  const auto put = [&](std::size_t s, std::int64_t v) { key[s] = static_cast<double>(v); };
-  for (std::size_t s = 0; s < M; ++s) put(s, kNone);
-  const auto setTarget = [&](std::size_t s, std::size_t pos) {
-    put(s, (get(s) & ~kNone) | static_cast<std::int64_t>(pos));
-    put(pos, get(pos) | kTakenPos);
-  };
+  ensure(key, T);
+  key.resize(T);
+  const std::int64_t* const id = p.id.data();
   std::copy(hist_.hStart.begin(), hist_.hStart.end() - 1, cur);
   for (std::size_t q = 0; q < nAll; ++q) {
     const auto a = static_cast<std::size_t>(bins_.binItems[q]);
@@ -133,54 +145,30 @@ void NeighbourSearch::packHistory(const ParticleStore& p, const Decomposition& d
       const int s = list_.slot[static_cast<std::size_t>(e)];
       if (s < 0) continue;
       const int j = list_.nbr[static_cast<std::size_t>(e)];
-      const int pos = cur[a < n ? a : static_cast<std::size_t>(j)]++;
-      if (dup(a, j)) ++cur[static_cast<std::size_t>(j)];
-      setTarget(static_cast<std::size_t>(s), static_cast<std::size_t>(pos));
-    }
-  }
-  for (std::size_t s = 0, pos = 0; s < M; ++s) {
-    if ((get(s) & kNone) != kNone) continue;
-    while (get(pos) & kTakenPos) ++pos;
-    setTarget(s, pos);
-  }
-  for (std::size_t s = 0; s < M; ++s) {  // move slot s to its target, cycle by cycle
-    if (get(s) & kMoved) continue;
-    double v[3] = {hist_.hS[3 * s], hist_.hS[3 * s + 1], hist_.hS[3 * s + 2]};
-    std::size_t k = s;
-    for (;;) {
-      const auto t = static_cast<std::size_t>(get(k) & kNone);
-      put(k, get(k) | kMoved);
-      for (int c = 0; c < 3; ++c) std::swap(v[c], hist_.hS[3 * t + static_cast<std::size_t>(c)]);
-      if (t == s) break;
-      k = t;
-    }
-  }
-  // pass 2: keys, orientation, second copies
-  std::copy(hist_.hStart.begin(), hist_.hStart.end() - 1, cur);
-  for (std::size_t q = 0; q < nAll; ++q) {
-    const auto a = static_cast<std::size_t>(bins_.binItems[q]);
-    for (int e = list_.rowStart[q]; e < list_.rowStart[q + 1]; ++e) {
-      if (list_.slot[static_cast<std::size_t>(e)] < 0) continue;
-      const int j = list_.nbr[static_cast<std::size_t>(e)];
-      double* v =
-          &hist_.hS[3 * static_cast<std::size_t>(cur[a < n ? a : static_cast<std::size_t>(j)])];
+      const double* v = &hist_.hS[3 * static_cast<std::size_t>(s)];
+      double w[3];
+      std::size_t pos;
       if (a < n) {
-        key[static_cast<std::size_t>(cur[a]++)] =
-            static_cast<double>(j >= 0 ? p.id[static_cast<std::size_t>(j)] : j);
+        pos = static_cast<std::size_t>(cur[a]++);
+        key[pos] = static_cast<double>(j >= 0 ? id[static_cast<std::size_t>(j)] : j);
+        for (int c = 0; c < 3; ++c) w[c] = v[c];
       } else {  // under the owned partner, seen from it
-        key[static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++)] =
-            static_cast<double>(p.id[a]);
-        for (int c = 0; c < 3; ++c) v[c] = -v[c];
+        pos = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
+        key[pos] = static_cast<double>(id[a]);
+        for (int c = 0; c < 3; ++c) w[c] = -v[c];
       }
+      std::memcpy(buf + pos * kRec, w, kRec);
       if (dup(a, j)) {
         const auto r = static_cast<std::size_t>(cur[static_cast<std::size_t>(j)]++);
-        key[r] = static_cast<double>(p.id[a]);
-        for (int c = 0; c < 3; ++c) hist_.hS[3 * r + static_cast<std::size_t>(c)] = -v[c];
+        key[r] = static_cast<double>(id[a]);
+        for (int c = 0; c < 3; ++c) w[c] = -w[c];
+        std::memcpy(buf + r * kRec, w, kRec);
       }
     }
   }
-  key.resize(T);
+  ensure(hist_.hS, 3 * T);
   hist_.hS.resize(3 * T);
+  if (T > 0) std::memcpy(hist_.hS.data(), buf, T * kRec);
   hist_.freeSlots.clear();
 }
 

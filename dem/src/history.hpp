@@ -33,23 +33,10 @@ struct HistoryPool {
     return hKey.data() + static_cast<std::size_t>(d) * n;
   }
 
-  [[gnu::noinline, gnu::cold]] int newSlot() {
-    std::size_t s;
-    if (!freeSlots.empty()) {
-      s = static_cast<std::size_t>(freeSlots.back());
-      freeSlots.pop_back();
-    } else {
-      s = slots();
-      ensure(hS, 3 * s + 3);
-      hS.resize(3 * s + 3);
-    }
-    hS[3 * s] = hS[3 * s + 1] = hS[3 * s + 2] = 0;
-    return static_cast<int>(s);
-  }
-  [[gnu::noinline]] void freeSlot(int s) {
-    ensure(freeSlots, freeSlots.size() + 1);
-    freeSlots.push_back(s);
-  }
+  /// A slot for a contact that starts (zero shear), and back to the free list. Out of line
+  /// (history.cpp): rare, and called from the force pass of every instruction set.
+  [[gnu::cold]] int newSlot();
+  void freeSlot(int s);
   /// Row i's histories [h0, h1) moved down to hw on (rows before it leave); hStart[w] = hw.
   void keepRows(std::size_t w, int h0, int h1, int& hw);
   /// The rows end after `rows` particles and hw histories.

@@ -133,7 +133,9 @@ struct DemSolver::Impl {
     ScopedPhase t(timers, ph);
     return f();
   }
-  bool decideRebuild();
+  /// The rebuild decision (one allreduce); v2: this rank's largest squared drift velocity of
+  /// the sub-step (the inner list's bound, NeighbourSearch::moved).
+  bool decideRebuild(double v2);
   void rebuild(bool first);
   void checkOverlap(double globalMax);
   std::string where() const;
@@ -147,6 +149,7 @@ struct DemSolver::Impl {
     f("list.rows", detail::cap(search.list().rowStart));
     f("list.nbr", detail::cap(search.list().nbr));
     f("list.slot", detail::cap(search.list().slot));
+    f("list.keep", detail::cap(search.list().keep));
     f("hist.rows", detail::cap(search.history().hStart));
     f("hist.key_x0", detail::cap(search.history().hKey));
     f("hist.shear", detail::cap(search.history().hS));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 
 #include "pairs.hpp"
 
@@ -20,7 +21,7 @@ namespace {
 constexpr std::size_t kIntBlock = 256;
 }
 
-void Integrator::initialIntegrate(ParticleStore& p, ContactForces& forces) const {
+double Integrator::initialIntegrate(ParticleStore& p, ContactForces& forces) const {
   const std::size_t n = p.nOwned;
   const double h = 0.5 * dt;
   double *X0 = p.x[0].data(), *X1 = p.x[1].data(), *X2 = p.x[2].data();
@@ -33,12 +34,18 @@ void Integrator::initialIntegrate(ParticleStore& p, ContactForces& forces) const
   const double g0 = g[0], g1 = g[1], g2 = g[2];
   Body* B = forces.bodies();
   const bool reset = forces.packed();
+  // the largest squared drift velocity (NaN and inf as the largest double)
+  constexpr double kBig = std::numeric_limits<double>::max();
+  double v2max = 0;
   for (std::size_t b0 = 0; b0 < n; b0 += kIntBlock) {
     const std::size_t b1 = std::min(n, b0 + kIntBlock);
-#pragma omp simd
+#pragma omp simd reduction(max : v2max)
     for (std::size_t i = b0; i < b1; ++i) {
       V0[i] += h * F0[i] / m[i], V1[i] += h * F1[i] / m[i], V2[i] += h * F2[i] / m[i];
       X0[i] += dt * V0[i], X1[i] += dt * V1[i], X2[i] += dt * V2[i];
+      const double v2 = V0[i] * V0[i] + V1[i] * V1[i] + V2[i] * V2[i];
+      const double c = v2 <= kBig ? v2 : kBig;
+      v2max = v2max > c ? v2max : c;
       const double I = 0.4 * m[i] * r[i] * r[i];
       W0[i] += h * T0[i] / I, W1[i] += h * T1[i] / I, W2[i] += h * T2[i] / I;
       if (reset) {
@@ -50,6 +57,7 @@ void Integrator::initialIntegrate(ParticleStore& p, ContactForces& forces) const
     for (std::size_t i = b0; i < b1; ++i)
       B[i] = Body{{X0[i], X1[i], X2[i]}, r[i], {V0[i], V1[i], V2[i]}, m[i]};
   }
+  return v2max;
 }
 
 void Integrator::finalIntegrate(ParticleStore& p) const {

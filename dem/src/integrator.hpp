@@ -16,8 +16,9 @@ class Integrator {
 
   /// v += dt/2 F/m, x += dt v, omega += dt/2 T/I. While the force part's bodies match the
   /// particles (ContactForces::packed), also the first part of the next force computation: the
-  /// owned bodies written and the force and torque sums reset to gravity + fExt.
-  void initialIntegrate(ParticleStore& p, ContactForces& forces) const;
+  /// owned bodies written and the force and torque sums reset to gravity + fExt. Returns the
+  /// largest |v|^2 of the drift (NaN and inf: the largest double), 0 without particles.
+  double initialIntegrate(ParticleStore& p, ContactForces& forces) const;
   /// v += dt/2 F/m, omega += dt/2 T/I.
   void finalIntegrate(ParticleStore& p) const;
 };

@@ -44,14 +44,42 @@ class NeighbourSearch {
   int* listSlots() { return list_.slot.data(); }
   /// The same, read only: after a force pass an entry has a slot exactly when it touches.
   const int* listSlots() const { return list_.slot.data(); }
+  /// The inner list's masks, one a row (neighbours.hpp), written by a pruning force pass.
+  KeepMask* listKeep() { return list_.keep.data(); }
+
+  // The pruned inner list. A force pass over the whole list with a margin > 0 marks in keep the
+  // entries whose gap is below it (and those that touch); while no two particles can have
+  // closed that gap since, the next passes visit the marked entries only (the others cannot
+  // touch: same results, bit for bit). The bound is the sum over the sub-steps of the largest
+  // drift of any particle (every rank sums the same global values: moved()); a rebuild, or the
+  // bound reaching half the margin (a pair closes at most twice it), ends the inner list.
+  /// The prune margin (m; 0: no inner list), set once.
+  void setPruneMargin(double m) { margin_ = m; }
+  double pruneMargin() const { return margin_; }
+  /// Whether the force pass may read the inner list.
+  bool innerListValid() const { return innerValid_; }
+  /// A force pass pruned the list at the current positions.
+  void pruned() {
+    innerValid_ = true;
+    moved_ = 0;
+    ++prunes_;
+  }
+  /// Pruning passes since construction (the same on every rank).
+  long long pruneCount() const { return prunes_; }
+  /// Every particle moved at most `d` (m) since the last call (a sub-step's drift, global); the
+  /// inner list ends when twice the sum reaches the margin (NaN and inf end it too).
+  void moved(double d);
+
   /// The history pool reduced to the slots the list holds (restore: the rows held every
   /// history twice, under both particles of a pair).
   void compactHistory() { hist_.compact(list_.slot); }
 
   /// The history pool becomes rows per owned particle of `p` (the format migration carries and
   /// the list build reads), keyed by the partner's global id (walls: -1..-6); `dec`, `nRanks`:
-  /// the owner of each particle (a pair bound for two ranks keeps a row under each).
-  void packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks);
+  /// the owner of each particle (a pair bound for two ranks keeps a row under each). `lend`: a
+  /// buffer dead during the call (24 bytes a history), in which the histories are gathered.
+  void packHistory(const ParticleStore& p, const Decomposition& dec, int nRanks,
+                   const Lender& lend);
   /// Owned particles of `p` put in (bin, id) order; the history rows stay in pre-sort order
   /// (the permutation is kept for buildLists).
   void sortByBin(ParticleStore& p);
@@ -76,6 +104,9 @@ class NeighbourSearch {
   std::vector<int> scratch_;
   // buildLists: the candidates of one row within reach (at most 1 + 13 bins' worth)
   std::vector<int> candidates_;
+  double margin_ = 0, moved_ = 0;
+  bool innerValid_ = false;
+  long long prunes_ = 0;
   // ints of the list's entry array that sortByBin borrows per owned particle (one column
   // element of up to 8 bytes); buildLists' trim keeps at least that many
   static constexpr std::size_t kSortBufferInts = 2;

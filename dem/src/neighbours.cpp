@@ -139,6 +139,10 @@ void NeighbourSearch::buildLists(const ParticleStore& p, double skin, const Wall
   list_.rowStart[nAll] = static_cast<int>(list_.nbr.size());
   trimRows(list_.nbr, kSortBufferInts * n);  // sortByBin's buffer
   trimRows(list_.slot);
+  // the inner list: none until the next force pass prunes this one
+  ensure(list_.keep, nAll);
+  list_.keep.resize(nAll);
+  innerValid_ = false;
   // rows no entry took are free slots
   hist_.freeSlots.clear();
   for (std::size_t e = 0; e < hist_.slots(); ++e)
@@ -156,6 +160,19 @@ void NeighbourSearch::keepPositions(const ParticleStore& p) {
   hist_.hKey.resize(3 * n);
   for (int d = 0; d < 3; ++d)
     std::copy_n(p.x[d].begin(), n, hist_.hKey.begin() + static_cast<std::ptrdiff_t>(d * n));
+}
+
+void NeighbourSearch::moved(double d) {
+  // A drift x += dt v moves a particle by dt |v| up to the rounding of the sum (an ulp of the
+  // coordinate), and a ghost's copy (x + a box length) by its own rounding: both covered by a
+  // relative 2^-40 of d and of the largest coordinate a local particle can have. The test's own
+  // rounding (a few ulps of the distances) by the 0.999.
+  double xMax = 0;
+  for (int c = 0; c < 3; ++c)
+    xMax = std::max(xMax, std::abs(bins_.origin[c]) + 2 * bins_.L[c] + 4 * bins_.bs[c]);
+  constexpr double kRel = 0x1p-40;
+  moved_ += d * (1 + kRel) + kRel * xMax;
+  if (!(2 * moved_ < 0.999 * margin_)) innerValid_ = false;
 }
 
 double NeighbourSearch::maxDisplacement2(const ParticleStore& p) const {

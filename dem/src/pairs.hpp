@@ -20,13 +20,16 @@
 
 namespace coloc::dem::detail {
 
-/// Touching entries gathered before a vector pass: ~21 KB, within L1 with the partners' data.
+/// Touching entries gathered before a vector pass: ~29 KB, within L1 with the partners' data.
 inline constexpr int kChunk = 128;
 
 struct PairChunk {
   // gathered (pass 1); wall >= 0: a wall entry (code -1 - wall in the list), computed in pass 3
   alignas(64) int i[kChunk], u[kChunk], slot[kChunk], coef[kChunk], wall[kChunk];
   alignas(64) double dx[3][kChunk], r2[kChunk];
+  // the holder's r, m, v and omega (pass 1 on AVX-512 stores them, eight lanes at a time, so
+  // that pass 2 reads instead of gathering them; see pairChunk's Holder)
+  alignas(64) double hold[8][kChunk];
   // results (pass 2)
   alignas(64) double fp[3][kChunk], nxft[3][kChunk], roll[3][kChunk], shear[3][kChunk],
       delta[kChunk];
@@ -50,10 +53,13 @@ struct PairInputs {
   double dt;
 };
 
+namespace {  // NOLINT(google-build-namespaces,cert-dcl59-cpp): one copy per instruction set
+
 /// Pass 2 over entries [0, ch.m) of the chunk. Wall entries are computed too, on harmless
 /// stand-in values (partner = holder, dx = (1, 0, 0)), and ignored by pass 3. Single: one
-/// material (every coef is 0), the coefficients are broadcast instead of gathered.
-template <Model M, bool Rolling, bool Single>
+/// material (every coef is 0), the coefficients are broadcast instead of gathered. Holder: the
+/// holder's values are read from ch.hold (the same values as its line and spin columns).
+template <Model M, bool Rolling, bool Single, bool Holder>
 inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
   const int m = ch.m;
   // the inputs as locals (loads of the pointers inside the loop would block the vectoriser)
@@ -68,7 +74,8 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
   for (int k = 0; k < m; ++k) {
     const int i = ch.i[k], u = ch.u[k];
     const Body &bi = B[i], &bu = B[u];
-    const double ri = bi.r, rj = bu.r, mi = bi.m, mj = bu.m;
+    const double ri = Holder ? ch.hold[0][k] : bi.r, rj = bu.r, mi = Holder ? ch.hold[1][k] : bi.m,
+                 mj = bu.m;
     // R* and m* with one division, independent of the distance
     const double rs = ri + rj, msum = mi + mj;
     const double q0 = 1.0 / (rs * msum);
@@ -78,8 +85,12 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
     const double inv = 1.0 / r;
     const double nrm[3] = {ch.dx[0][k] * inv, ch.dx[1][k] * inv, ch.dx[2][k] * inv};
     const double delta = rs - r;
-    const double wi[3] = {W0[i], W1[i], W2[i]}, wj[3] = {W0[u], W1[u], W2[u]};
-    const double vr[3] = {bi.v[0] - bu.v[0], bi.v[1] - bu.v[1], bi.v[2] - bu.v[2]};
+    const double wi[3] = {Holder ? ch.hold[5][k] : W0[i], Holder ? ch.hold[6][k] : W1[i],
+                          Holder ? ch.hold[7][k] : W2[i]};
+    const double wj[3] = {W0[u], W1[u], W2[u]};
+    const double vi[3] = {Holder ? ch.hold[2][k] : bi.v[0], Holder ? ch.hold[3][k] : bi.v[1],
+                          Holder ? ch.hold[4][k] : bi.v[2]};
+    const double vr[3] = {vi[0] - bu.v[0], vi[1] - bu.v[1], vi[2] - bu.v[2]};
     const double ws[3] = {ri * wi[0] + rj * wj[0], ri * wi[1] + rj * wj[1],
                           ri * wi[2] + rj * wj[2]};
     const double wr[3] = {wi[0] - wj[0], wi[1] - wj[1], wi[2] - wj[2]};
@@ -98,4 +109,5 @@ inline void pairChunk(const PairInputs& in, bool update, PairChunk& ch) {
   }
 }
 
+}  // namespace
 }  // namespace coloc::dem::detail

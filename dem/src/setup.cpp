@@ -65,6 +65,16 @@ DemSolver::Impl::Impl(const Decomposition& d, const Config& cfg, Timers& t, DemS
   const double dmax = 2 * rmax;
   skin = cfg.number("particles.skin") * dmax;
   rc = dmax + skin;
+  search.setPruneMargin(cfg.number("particles.prune_margin") * dmax);
+  {
+    const std::string isa = cfg.string("particles.force_isa");
+    const ForceIsa want = isa == "avx512"   ? ForceIsa::Avx512
+                          : isa == "scalar" ? ForceIsa::Scalar
+                                            : ForceIsa::Widest;
+    if (!forces.selectIsa(want))
+      throw ConfigError("particles.force_isa",
+                        "avx512: this CPU lacks AVX-512 (F and VL); use scalar or widest");
+  }
   setupFaces(cfg);
   for (int k = 0; k < 3; ++k)
     wallOn[k] = {face[k][0] == Face::Wall && dec.atLowBoundary(k),
