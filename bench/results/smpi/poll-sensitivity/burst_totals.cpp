@@ -29,14 +29,22 @@
 #include <cstdio>
 #include <cstdlib>
 
-struct Totals { long n = 0; double raw = 0, charged = 0; long cn[4] = {}; double cc[4] = {}; };
+struct Totals {
+  long n = 0;
+  double raw = 0, charged = 0;
+  long cn[4] = {};
+  double cc[4] = {};
+};
 Totals tot;
 __attribute__((destructor)) void writeTotals() {
   const char* path = std::getenv("COLOC_SMPI_BURST_TOTALS");
   if (!path || tot.n == 0) return;
   if (std::FILE* f = std::fopen(path, "a")) {
-    std::fprintf(f, "{\"bursts\": %ld, \"raw_s\": %.6e, \"charged_s\": %.6e, \"by_size\": [[%ld, %.6e], [%ld, %.6e], [%ld, %.6e], [%ld, %.6e]]}\n",
-                 tot.n, tot.raw, tot.charged, tot.cn[0], tot.cc[0], tot.cn[1], tot.cc[1], tot.cn[2], tot.cc[2], tot.cn[3], tot.cc[3]);
+    std::fprintf(f,
+                 "{\"bursts\": %ld, \"raw_s\": %.6e, \"charged_s\": %.6e, \"by_size\": [[%ld, "
+                 "%.6e], [%ld, %.6e], [%ld, %.6e], [%ld, %.6e]]}\n",
+                 tot.n, tot.raw, tot.charged, tot.cn[0], tot.cc[0], tot.cn[1], tot.cc[1], tot.cn[2],
+                 tot.cc[2], tot.cn[3], tot.cc[3]);
     std::fclose(f);
   }
 }
@@ -102,8 +110,11 @@ extern "C" double xbt_os_timer_elapsed(const void* timer) {
   }
   const double charged = t - offset();
   const double c = charged > 0 ? charged : 0.0;
-  tot.n += 1; tot.raw += t; tot.charged += c;
+  tot.n += 1;
+  tot.raw += t;
+  tot.charged += c;
   const int k = t < 1e-6 ? 0 : (t < 1e-5 ? 1 : (t < 1e-4 ? 2 : 3));
-  tot.cn[k] += 1; tot.cc[k] += c;
+  tot.cn[k] += 1;
+  tot.cc[k] += c;
   return c;
 }

@@ -3,6 +3,7 @@
 // libcoloc_smpi_burst.so preloaded and COLOC_SMPI_BURST_STATS=FILE (as smpi_run.py measures
 // the empty burst of smpi_empty_bursts).
 #include <mpi.h>
+
 #include <cstdio>
 #include <cstdlib>
 int main(int argc, char** argv) {
@@ -16,7 +17,8 @@ int main(int argc, char** argv) {
   const double t0 = MPI_Wtime();
   for (int it = 0; it < iters; ++it) MPI_Iprobe(MPI_ANY_SOURCE, 7, MPI_COMM_WORLD, &flag, &st);
   const double t = MPI_Wtime() - t0;
-  if (rank == 0) std::printf("%d ranks, %d polls: %.4f us a poll (simulated)\n", size, iters, 1e6 * t / iters);
+  if (rank == 0)
+    std::printf("%d ranks, %d polls: %.4f us a poll (simulated)\n", size, iters, 1e6 * t / iters);
   MPI_Finalize();
   return 0;
 }
