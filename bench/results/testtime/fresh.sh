@@ -5,7 +5,7 @@
 #   build-essential cmake ninja-build pkg-config libgtest-dev libgmock-dev libbenchmark-dev
 #   clang-format git python3 python3-venv procps ca-certificates; apt-get clean; tar -C DIR -cf TAR .)
 # REPO: a git repository whose main is cloned inside. OUT: where the logs go.
-# Extracts TAR into a scratch folder, mounts /proc, /dev, /dev/pts and a /dev/shm tmpfs, clones
+# Extracts TAR into a scratch folder, mounts /proc, /sys, /dev, /dev/pts and a /dev/shm tmpfs, clones
 # REPO, then runs `bench/run.sh` and `tests/run.sh` in the clone as root, each under `time`;
 # the two logs (with tests/run.sh's own time by part) go to OUT. Needs root; nothing else should
 # run on the machine meanwhile.
@@ -14,11 +14,12 @@ TAR=$1 REPO=$2 OUT=$3
 mkdir -p "$OUT"
 root=$(mktemp -d /work/fresh-XXXX)
 cleanup() {
-  for m in dev/shm dev/pts dev proc; do umount -l "$root/$m" 2>/dev/null || true; done
+  for m in dev/shm dev/pts dev sys proc; do umount -l "$root/$m" 2>/dev/null || true; done
 }
 trap cleanup EXIT
 tar -C "$root" -xf "$TAR"
 mount -t proc proc "$root/proc"
+mount --rbind /sys "$root/sys"  # hwloc: without it Open MPI sees no topology, and its ranks sleep
 mount --bind /dev "$root/dev"
 mount --bind /dev/pts "$root/dev/pts"
 mount -t tmpfs -o size=4g tmpfs "$root/dev/shm"
