@@ -7,7 +7,7 @@
 # REPO: a git repository whose main is cloned inside. OUT: where the logs go.
 # Extracts TAR into a scratch folder, mounts /proc, /sys, /dev, /dev/pts and a /dev/shm tmpfs, clones
 # REPO, then runs `bench/run.sh` and `tests/run.sh` in the clone as root, each under `time`;
-# the two logs (with tests/run.sh's own time by part) go to OUT. Needs root; nothing else should
+# the two logs (with tests/run.sh's own time by part) go to OUT (FRESH_COMMANDS: another list). Needs root; nothing else should
 # run on the machine meanwhile.
 set -eu
 TAR=$1 REPO=$2 OUT=$3
@@ -24,10 +24,13 @@ mount --bind /dev "$root/dev"
 mount --bind /dev/pts "$root/dev/pts"
 mount -t tmpfs -o size=4g tmpfs "$root/dev/shm"
 cp /etc/resolv.conf "$root/etc/resolv.conf"
+# the host name as the machine resolves it: without it every mpirun waits ~5 s on DNS
+cp /etc/hosts "$root/etc/hosts"
+cp /etc/hostname "$root/etc/hostname" 2>/dev/null || true
 git clone -q --branch main "$REPO" "$root/coloc"
 git -C "$root/coloc" log --oneline -1 > "$OUT/commit.txt"
 status=0
-for cmd in bench/run.sh tests/run.sh; do
+for cmd in ${FRESH_COMMANDS:-bench/run.sh tests/run.sh}; do
   name=$(basename "$(dirname "$cmd")")
   start=$(date +%s)
   chroot "$root" /bin/bash -c "cd /coloc && export HOME=/root && time $cmd" > "$OUT/$name.log" 2>&1 ||
