@@ -16,10 +16,16 @@
 // the offset is the median charge of an empty burst, measured just before by running
 // smpi_empty_bursts with
 //   COLOC_SMPI_BURST_STATS=FILE  which writes the number of bursts and their median, 10th and
-//                                90th percentiles (seconds, as SMPI timed them) at exit.
+//                                90th percentiles (seconds, as SMPI timed them) at exit;
+//   COLOC_SMPI_BURST_TOTALS=FILE appends at exit the bursts timed, their raw and charged sums,
+//                                and the count and charged sum of those under 1 us, 1-10 us,
+//                                10-100 us and longer (the last also holds SimGrid's own uses of
+//                                the timer: not simulated time;
+//                                bench/results/smpi/poll-sensitivity).
 // Other users of the function (SimGrid's own timers) are not simulated time.
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
@@ -49,6 +55,20 @@ double offset() {
   return s;
 }
 
+/// COLOC_SMPI_BURST_TOTALS: what the run's bursts were charged, by size.
+struct Totals {
+  long n = 0;
+  double raw = 0, charged = 0;
+  long count[4] = {};
+  double chargedBySize[4] = {};
+};
+Totals totals;
+
+const char* totalsPath() {
+  static const char* path = std::getenv("COLOC_SMPI_BURST_TOTALS");
+  return path;
+}
+
 bool recording() {
   static const bool on = std::getenv("COLOC_SMPI_BURST_STATS") != nullptr;
   return on;
@@ -74,6 +94,21 @@ __attribute__((destructor)) void writeStats() {
   }
 }
 
+__attribute__((destructor)) void writeTotals() {
+  const char* path = totalsPath();
+  if (!path || totals.n == 0) return;
+  if (std::FILE* f = std::fopen(path, "a")) {
+    const Totals& t = totals;
+    std::fprintf(f,
+                 "{\"bursts\": %ld, \"raw_s\": %.6e, \"charged_s\": %.6e, \"by_size\": [[%ld, "
+                 "%.6e], [%ld, %.6e], [%ld, %.6e], [%ld, %.6e]]}\n",
+                 t.n, t.raw, t.charged, t.count[0], t.chargedBySize[0], t.count[1],
+                 t.chargedBySize[1], t.count[2], t.chargedBySize[2], t.count[3],
+                 t.chargedBySize[3]);
+    std::fclose(f);
+  }
+}
+
 }  // namespace
 
 extern "C" double xbt_os_timer_elapsed(const void* timer) {
@@ -83,6 +118,14 @@ extern "C" double xbt_os_timer_elapsed(const void* timer) {
     ++histogram[b < 0 ? 0 : (b > kBins ? kBins : b)];
     ++bursts;
   }
-  const double charged = t - offset();
-  return charged > 0 ? charged : 0.0;
+  const double charged = std::max(t - offset(), 0.0);
+  if (totalsPath()) {
+    const int k = t < 1e-6 ? 0 : (t < 1e-5 ? 1 : (t < 1e-4 ? 2 : 3));
+    ++totals.n;
+    totals.raw += t;
+    totals.charged += charged;
+    ++totals.count[k];
+    totals.chargedBySize[k] += charged;
+  }
+  return charged;
 }
